@@ -1,0 +1,52 @@
+"""The `bittc` command line.
+
+Each subcommand lives in its own module of this package and exposes
+``add_parser(subparsers) -> argparse.ArgumentParser`` and ``run(args) -> int``.
+Errors meant for the user are raised as :class:`CliError`; ``main`` prints them on
+one line to stderr and exits with status 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+
+from bittc_core.errors import CliError
+
+#: subcommand name -> module (imported lazily so `bittc --help` stays fast)
+COMMANDS: dict[str, str] = {
+    "run": "bittc_core.cli.run_cmd",
+    "scenarios": "bittc_core.cli.scenarios_cmd",
+    "suite": "bittc_core.cli.suite_cmd",
+}
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="bittc",
+        description="Closed-loop camera collision-warning simulator built around Binary TTC.",
+    )
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+    for name, module_name in COMMANDS.items():
+        module = importlib.import_module(module_name)
+        p = module.add_parser(sub)
+        p.set_defaults(_run=module.run)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return int(args._run(args) or 0)
+    except CliError as err:
+        print(f"bittc {args.command}: error: {err}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print(f"bittc {args.command}: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())
