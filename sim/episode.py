@@ -1,0 +1,260 @@
+"""A scenario run: highway-env traffic, the PyBullet camera, ground truth, step by step.
+
+Time: the traffic is integrated at ``SIM_DT_S`` (100 Hz); the camera captures a frame
+every ``camera.dt_s``; a controller decides once per frame. Frame k is captured at
+t = k * camera.dt_s; its ground truth compares it with frame k-1.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from scenarios.spec import ActorSpec, ScenarioCase
+from sim.actor_truth import ActorTruth, actor_truth, footprint_distance
+from sim.camera import CameraConfig, cam_T_ego
+from sim.ground_truth import GroundTruth, compute_ground_truth, planar_pose
+from sim.traffic import ActuatorConfig, EgoVehicle, ScriptedVehicle, TrafficVehicle, build_road
+from sim.vehicles import EGO_SIZE_M, VehicleSpec, footprint_corners, footprints_overlap, sample_spec
+
+SIM_DT_S = 0.01  # traffic integration step [s]
+STANDSTILL_MPS = 0.01  # [m/s]
+POST_COLLISION_S = 1.0  # a run ends this long after the first contact [s] (Euro NCAP)
+VIEW_MARGIN_M = 250.0  # road built this far beyond the furthest vehicle [m]
+
+
+@dataclass(frozen=True)
+class Collision:
+    t_s: float
+    instance: int
+    impact_speed_mps: float  # ego speed at first contact [m/s]
+    relative_impact_speed_mps: float  # ego minus actor speed along the ego's heading [m/s]
+
+
+@dataclass
+class StepTruth:
+    """Ground truth at a frame. Never part of what a (non-oracle) policy observes."""
+
+    t_s: float
+    ego_speed_mps: float
+    actors: list[ActorTruth]
+    critical: ActorTruth | None  # in-path actor ahead with the smallest TTC
+    gt: GroundTruth | None = None  # per-pixel maps (only when the camera renders)
+    collision: Collision | None = None
+
+
+@dataclass
+class _Actor:
+    instance: int
+    spec: VehicleSpec
+    vehicle: ScriptedVehicle | TrafficVehicle
+    initial_speed_mps: float
+
+
+@dataclass
+class Frame:
+    """A captured frame: image (H, W, 3) uint8, exact depth and instances, and the poses
+    (world x [m], y [m], heading [rad]) of every actor at capture time."""
+
+    t_s: float
+    image: np.ndarray | None
+    cam_T_world: np.ndarray
+    poses: dict[int, tuple[float, float, float]] = field(default_factory=dict)
+    depth_m: np.ndarray | None = None
+    instance: np.ndarray | None = None
+
+
+class ScenarioSim:
+    """One run of a scenario case.
+
+    Args:
+        case: the resolved scenario.
+        camera: camera config; rendering happens only when ``render`` is True.
+        seed: draws scenery, vehicle appearance and background traffic.
+        render: render camera frames and per-pixel ground truth.
+        actuator: the ego's brake actuator.
+    """
+
+    def __init__(self, case: ScenarioCase, camera: CameraConfig, seed: int, render: bool, actuator: ActuatorConfig | None = None):
+        self.case = case
+        self.camera = camera
+        self.seed = seed
+        self.render_enabled = render
+        self.actuator = actuator or ActuatorConfig()
+        self.rng = np.random.default_rng(seed)
+        self.n_sub = max(1, int(round(camera.dt_s / SIM_DT_S)))
+        self.sim_dt_s = camera.dt_s / self.n_sub
+        self.world = None
+        self._build()
+
+    # ------------------------------------------------------------------ setup
+    def _build(self) -> None:
+        case, rng = self.case, self.rng
+        v_ego = case.ego.speed_kph / 3.6
+        ego_len, ego_w, _ = EGO_SIZE_M
+        placements = []
+        far_x = 0.0
+        for a in case.actors:
+            spec = sample_spec(rng, a.vehicle)
+            x, y, heading = self._placement(a, spec, v_ego)
+            placements.append((a, spec, x, y, heading))
+            far_x = max(far_x, x + (a.speed_kph / 3.6 if a.direction == "same" else 0.0) * case.duration_s)
+        far_x = max(far_x, v_ego * case.duration_s) + VIEW_MARGIN_M
+        road = replace(case.road, x_end_m=far_x)
+        self.road_cfg = road
+        self.road = build_road(road, self.seed)
+        self.ego = EgoVehicle(self.road, 0.0, 0.0, v_ego, ego_len, ego_w, self.actuator, self.sim_dt_s)
+        self.road.vehicles.append(self.ego)
+        if self.render_enabled:
+            from sim.world import World
+
+            self.world = World(self.camera, road, seed=self.seed)
+        self.actors: list[_Actor] = []
+        for a, spec, x, y, heading in placements:
+            lc = None
+            if a.lane_change is not None:
+                lc = (a.lane_change.start_s, a.lane_change.duration_s, road.lane_center_y_m(a.lane_change.to_lane))
+            veh = ScriptedVehicle(self.road, x, y, heading, a.speed_kph / 3.6, spec.length_m, spec.width_m,
+                                  accel_mps2=-a.decel_mps2 if a.decel_mps2 > 0 else a.accel_mps2,
+                                  brake_onset_s=a.brake_onset_s if a.decel_mps2 > 0 else 0.0, lane_change=lc)  # fmt: skip
+            self._add_actor(spec, veh)
+        self._add_background_traffic(v_ego)
+
+    def _placement(self, a: ActorSpec, spec: VehicleSpec, v_ego: float) -> tuple[float, float, float]:
+        """Initial (x, y, heading) of a scripted actor from Euro NCAP-style parameters."""
+        gap = a.headway_m if a.headway_m is not None else a.headway_s * v_ego
+        x = EGO_SIZE_M[0] / 2 + gap + spec.length_m / 2
+        # overlap O: share of the ego's width overlapped; O < 0 puts the target on the right
+        offset = math.copysign(1.0, a.overlap_pct) * (1.0 - abs(a.overlap_pct) / 100.0) * EGO_SIZE_M[1]
+        y = self.case.road.lane_center_y_m(a.lane) + offset
+        heading = 0.0 if a.direction == "same" else math.pi
+        return x, y, heading
+
+    def _add_actor(self, spec: VehicleSpec, veh) -> None:
+        self.road.vehicles.append(veh)
+        instance = self.world.add_vehicle(spec) if self.world is not None else len(self.actors) + 1
+        self.actors.append(_Actor(instance, spec, veh, float(veh.speed)))
+
+    def _add_background_traffic(self, v_ego: float) -> None:
+        lanes = [k for k in range(-self.road_cfg.lanes_right, self.road_cfg.lanes_left + 1) if k != 0]
+        for i in range(self.case.traffic if lanes else 0):
+            spec = sample_spec(self.rng, str(self.rng.choice(["car", "car", "van", "truck"])))
+            lane = lanes[i % len(lanes)]
+            x = float(self.rng.uniform(-30.0, 150.0))
+            speed = max(0.0, v_ego + float(self.rng.uniform(-8.0, 8.0)))
+            veh = TrafficVehicle(self.road, x, self.road_cfg.lane_center_y_m(lane), speed, spec.length_m, spec.width_m)
+            if any(footprints_overlap(self._corners(veh, spec), self._corners(o.vehicle, o.spec)) for o in self.actors):
+                continue
+            self._add_actor(spec, veh)
+
+    # ------------------------------------------------------------------ state
+    @staticmethod
+    def _corners(veh, spec: VehicleSpec) -> np.ndarray:
+        x, y, h = veh.world_pose()
+        return footprint_corners(x, y, h, spec.length_m, spec.width_m)
+
+    def _ego_corners(self) -> np.ndarray:
+        x, y, h = self.ego.world_pose()
+        return footprint_corners(x, y, h, EGO_SIZE_M[0], EGO_SIZE_M[1])
+
+    def actor_truths(self) -> list[ActorTruth]:
+        ego_pose = self.ego.world_pose()
+        return [
+            actor_truth(a.instance, ego_pose, EGO_SIZE_M[:2], float(self.ego.speed), a.vehicle.world_pose(),
+                        (a.spec.length_m, a.spec.width_m), a.vehicle.world_velocity())  # fmt: skip
+            for a in self.actors
+        ]
+
+    def truth(self) -> StepTruth:
+        actors = self.actor_truths()
+        threats = [a for a in actors if a.in_path and a.ahead]
+        critical = min(threats, key=lambda a: (a.ttc_s, a.gap_m)) if threats else None
+        return StepTruth(self.t_s, float(self.ego.speed), actors, critical, collision=self.collision)
+
+    def min_distance_m(self) -> float:
+        ego = self._ego_corners()
+        return min((footprint_distance(ego, self._corners(a.vehicle, a.spec)) for a in self.actors), default=math.inf)
+
+    # ------------------------------------------------------------------ camera
+    def _camera_pose(self) -> np.ndarray:
+        jitter = (0.0, 0.0, 0.0)
+        if self.camera.jitter_deg > 0:
+            jitter = tuple(self.rng.normal(0.0, self.camera.jitter_deg, 3))
+        x, y, h = self.ego.world_pose()
+        return cam_T_ego(self.camera, jitter) @ np.linalg.inv(planar_pose(x, y, h))
+
+    def capture(self) -> Frame:
+        """Render the current state (poses mirrored into PyBullet first)."""
+        cam_T_world = self._camera_pose()
+        poses = {a.instance: a.vehicle.world_pose() for a in self.actors}
+        if self.world is None:
+            return Frame(self.t_s, None, cam_T_world, poses)
+        for inst, pose in poses.items():
+            self.world.set_vehicle_pose(inst, *pose)
+        r = self.world.render(cam_T_world)
+        return Frame(self.t_s, r.rgb, cam_T_world, poses, r.depth_m, r.instance)
+
+    def ground_truth(self, prev: Frame, latest: Frame) -> GroundTruth:
+        motions = {i: planar_pose(*prev.poses[i]) @ np.linalg.inv(planar_pose(*latest.poses[i])) for i in latest.poses}
+        return compute_ground_truth(latest.depth_m, latest.instance, self.camera.K(), latest.cam_T_world, prev.cam_T_world,
+                                    motions, latest.t_s - prev.t_s, self.camera.far_m)  # fmt: skip
+
+    # ------------------------------------------------------------------ stepping
+    def reset(self) -> StepTruth:
+        self.t_s = 0.0
+        self.collision: Collision | None = None
+        self.min_gap_m = self.min_distance_m()
+        self.ego_braked = False
+        return self.truth()
+
+    def substep(self, decel_mps2: float) -> None:
+        """Integrate one traffic step with a requested ego deceleration [m/s^2]."""
+        dt = self.sim_dt_s
+        if self.collision is None:
+            self.ego.command(decel_mps2, dt)
+            for a in self.actors:
+                a.vehicle.command(self.t_s, dt)
+            for v in self.road.vehicles:
+                v.step(dt)
+        self.t_s = round(self.t_s + dt, 9)
+        self.ego_braked |= self.ego.current_accel_mps2 < -0.5
+        if self.collision is None:
+            self._check_collision()
+            self.min_gap_m = min(self.min_gap_m, self.min_distance_m())
+
+    def _check_collision(self) -> None:
+        ego = self._ego_corners()
+        for a in self.actors:
+            if footprints_overlap(ego, self._corners(a.vehicle, a.spec)):
+                heading = -self.ego.heading
+                along = np.array([math.cos(heading), math.sin(heading)])
+                v_rel = float(self.ego.speed) - float(a.vehicle.world_velocity() @ along)
+                self.collision = Collision(self.t_s, a.instance, float(self.ego.speed), v_rel)
+                for v in self.road.vehicles:  # both come to rest at the contact (highway-env does too)
+                    v.speed = 0.0
+                return
+
+    def done(self, truth: StepTruth) -> str | None:
+        """Why the run ends now, or None."""
+        if self.collision is not None:
+            return "collision" if self.t_s >= self.collision.t_s + POST_COLLISION_S - 1e-9 else None
+        still_closing = truth.critical is not None and truth.critical.closing_speed_mps > 1e-6
+        if self.case.ego.speed_kph > 0 and self.ego.speed < STANDSTILL_MPS and not still_closing:
+            return "standstill"
+        if self.ego_braked and truth.critical is None or (
+            self.ego_braked and truth.critical.closing_speed_mps < 0 and self._actor(truth.critical.instance).vehicle.current_accel_mps2 >= 0
+        ):
+            return "resolved"
+        if self.t_s >= self.case.duration_s - 1e-9:
+            return "duration"
+        return None
+
+    def _actor(self, instance: int) -> _Actor:
+        return next(a for a in self.actors if a.instance == instance)
+
+    def close(self) -> None:
+        if self.world is not None:
+            self.world.close()
+            self.world = None

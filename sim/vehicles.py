@@ -1,0 +1,113 @@
+"""Vehicle classes, their real-world sizes, and their multi-part PyBullet bodies.
+
+Convention: a vehicle body's frame has its origin on the ground under the centre of
+its footprint, x forward, y left, z up. The footprint is ``length_m x width_m``; the
+lower body box spans exactly that footprint, so its rear face lies at x = -length/2
+(the rear bumper plane used for bumper-to-bumper gaps).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+# Size ranges (length, width, height) [m] per class.
+VEHICLE_CLASSES: dict[str, tuple[tuple[float, float], tuple[float, float], tuple[float, float]]] = {
+    "car": ((4.0, 4.9), (1.7, 1.9), (1.4, 1.6)),
+    "gvt": ((4.02, 4.02), (1.71, 1.71), (1.5, 1.5)),  # Euro NCAP global vehicle target
+    "van": ((4.8, 5.5), (1.9, 2.05), (1.9, 2.4)),
+    "truck": ((7.0, 10.0), (2.4, 2.55), (3.0, 3.6)),
+}
+EGO_SIZE_M = (4.6, 1.815, 1.45)  # Euro NCAP files use a 1.815 m ego width
+
+PALETTE = [
+    (0.8, 0.1, 0.1), (0.1, 0.2, 0.7), (0.9, 0.9, 0.9), (0.15, 0.15, 0.15),
+    (0.6, 0.6, 0.65), (0.1, 0.5, 0.2), (0.9, 0.6, 0.1), (0.5, 0.1, 0.5),
+]  # fmt: skip
+
+WHEEL_RADIUS_M = 0.32
+WHEEL_WIDTH_M = 0.22
+GROUND_CLEARANCE_M = 0.22
+
+
+@dataclass(frozen=True)
+class VehicleSpec:
+    kind: str
+    length_m: float
+    width_m: float
+    height_m: float
+    color_rgb: tuple[float, float, float]
+
+    def __post_init__(self) -> None:
+        if self.kind not in VEHICLE_CLASSES and self.kind != "ego":
+            raise ValueError(f"unknown vehicle kind {self.kind!r}; known: {sorted(VEHICLE_CLASSES)}")
+        for name in ("length_m", "width_m", "height_m"):
+            if not getattr(self, name) > 0:
+                raise ValueError(f"VehicleSpec.{name} must be > 0, got {getattr(self, name)}")
+
+
+def sample_spec(rng: np.random.Generator, kind: str) -> VehicleSpec:
+    """Draw a size inside the class's range and a colour from the palette."""
+    if kind not in VEHICLE_CLASSES:
+        raise ValueError(f"unknown vehicle kind {kind!r}; known: {sorted(VEHICLE_CLASSES)}")
+    (l0, l1), (w0, w1), (h0, h1) = VEHICLE_CLASSES[kind]
+    color = PALETTE[int(rng.integers(len(PALETTE)))]
+    jitter = rng.uniform(-0.05, 0.05, 3)
+    color = tuple(float(np.clip(c + j, 0, 1)) for c, j in zip(color, jitter))
+    return VehicleSpec(kind, float(rng.uniform(l0, l1)), float(rng.uniform(w0, w1)), float(rng.uniform(h0, h1)), color)
+
+
+@dataclass(frozen=True)
+class Part:
+    """A box or cylinder in the vehicle's body frame."""
+
+    shape: str  # "box" | "wheel"
+    center_m: tuple[float, float, float]
+    half_extents_m: tuple[float, float, float]  # for a wheel: (radius, half width, radius)
+    texture: str  # "paint" | "glass" | "tyre"
+
+
+def parts(spec: VehicleSpec) -> list[Part]:
+    """Lower body on the full footprint, cabin (or cargo box) on top, four wheels."""
+    L, W, H = spec.length_m, spec.width_m, spec.height_m
+    truck = spec.kind == "truck"
+    van = spec.kind == "van"
+    body_top = GROUND_CLEARANCE_M + (0.45 * H if not truck else 0.35 * H)
+    out = [Part("box", (0.0, 0.0, (GROUND_CLEARANCE_M + body_top) / 2), (L / 2, W / 2, (body_top - GROUND_CLEARANCE_M) / 2), "paint")]
+    if truck:
+        cab_len = 2.2
+        out.append(Part("box", (L / 2 - cab_len / 2, 0.0, (body_top + H * 0.85) / 2), (cab_len / 2, W / 2 * 0.98, (H * 0.85 - body_top) / 2), "glass"))
+        box_len = L - cab_len - 0.3
+        out.append(Part("box", (-L / 2 + box_len / 2, 0.0, (body_top + H) / 2), (box_len / 2, W / 2, (H - body_top) / 2), "paint"))
+    else:
+        cab_len = L * (0.8 if van else 0.52)
+        cab_x = -L * (0.06 if van else 0.08)
+        out.append(Part("box", (cab_x, 0.0, (body_top + H) / 2), (cab_len / 2, W / 2 * 0.92, (H - body_top) / 2), "glass"))
+    axle = L / 2 - max(0.8, 0.17 * L)
+    for x in (axle, -axle):
+        for side in (1, -1):
+            y = side * (W / 2 - WHEEL_WIDTH_M / 2)
+            out.append(Part("wheel", (x, y, WHEEL_RADIUS_M), (WHEEL_RADIUS_M, WHEEL_WIDTH_M / 2, WHEEL_RADIUS_M), "tyre"))
+    return out
+
+
+def footprint_corners(x_m: float, y_m: float, heading_rad: float, length_m: float, width_m: float) -> np.ndarray:
+    """(4, 2) corners of an oriented footprint rectangle in the world plane."""
+    c, s = math.cos(heading_rad), math.sin(heading_rad)
+    local = np.array([[1, 1], [1, -1], [-1, -1], [-1, 1]]) * [length_m / 2, width_m / 2]
+    R = np.array([[c, -s], [s, c]])
+    return local @ R.T + [x_m, y_m]
+
+
+def footprints_overlap(a: np.ndarray, b: np.ndarray) -> bool:
+    """Separating-axis test for two convex polygons given as (N, 2) corners."""
+    for poly in (a, b):
+        edges = np.roll(poly, -1, axis=0) - poly
+        for ex, ey in edges:
+            axis = np.array([-ey, ex])
+            pa, pb = a @ axis, b @ axis
+            if pa.max() < pb.min() or pb.max() < pa.min():
+                return False
+    return True

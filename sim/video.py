@@ -1,0 +1,67 @@
+"""Camera video with the exact TTC as a colour overlay and a HUD, written headless."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+TTC_MAX_S = 4.0  # overlay colours 0 < tau <= TTC_MAX_S [s]; red = imminent
+
+
+def ttc_overlay(image_rgb: np.ndarray, tau_s: np.ndarray, valid: np.ndarray, alpha: float = 0.55) -> np.ndarray:
+    """Blend a red (0 s) -> yellow -> green (TTC_MAX_S) colour map over approaching pixels."""
+    out = image_rgb.astype(np.float32).copy()
+    mask = valid & (tau_s > 0) & (tau_s <= TTC_MAX_S)
+    t = np.clip(tau_s / TTC_MAX_S, 0, 1)
+    color = np.stack([np.clip(2 - 2 * t, 0, 1), np.clip(2 * t, 0, 1), np.zeros_like(t)], axis=-1) * 255.0
+    out[mask] = (1 - alpha) * out[mask] + alpha * color[mask]
+    return out.astype(np.uint8)
+
+
+def hud(image_rgb: np.ndarray, lines: list[str], alert: bool) -> np.ndarray:
+    img = np.ascontiguousarray(image_rgb)
+    y = 16
+    for line in lines:
+        cv2.putText(img, line, (6, y), cv2.FONT_HERSHEY_SIMPLEX, 0.45, (0, 0, 0), 3, cv2.LINE_AA)
+        cv2.putText(img, line, (6, y), cv2.FONT_HERSHEY_SIMPLEX, 0.45, (255, 255, 255), 1, cv2.LINE_AA)
+        y += 16
+    if alert:
+        cv2.rectangle(img, (1, 1), (img.shape[1] - 2, img.shape[0] - 2), (255, 0, 0), 3)
+    return img
+
+
+class VideoWriter:
+    """mp4 (mp4v) writer that writes to a temporary name and renames on ``close``."""
+
+    def __init__(self, path: str | Path, fps_hz: float, min_width_px: int = 864):
+        self.path = Path(path)
+        self.tmp = self.path.with_name(f".{self.path.name}.tmp.mp4")
+        self.fps = fps_hz
+        self.min_width = min_width_px
+        self._writer = None
+
+    def scale_for(self, width_px: int) -> int:
+        return max(1, int(np.ceil(self.min_width / width_px)))
+
+    def write(self, image_rgb: np.ndarray) -> None:
+        if self._writer is None:
+            h, w = image_rgb.shape[:2]
+            self._writer = cv2.VideoWriter(str(self.tmp), cv2.VideoWriter_fourcc(*"mp4v"), self.fps, (w, h))
+            if not self._writer.isOpened():
+                raise OSError(f"cannot open a video writer for {self.tmp}")
+        self._writer.write(cv2.cvtColor(image_rgb, cv2.COLOR_RGB2BGR))
+
+    def close(self) -> None:
+        if self._writer is not None:
+            self._writer.release()
+            os.replace(self.tmp, self.path)
+            self._writer = None
+
+    def abort(self) -> None:
+        if self._writer is not None:
+            self._writer.release()
+            self._writer = None
+        self.tmp.unlink(missing_ok=True)

@@ -1,0 +1,222 @@
+"""The PyBullet world: owns one DIRECT client, the scenery, the vehicle bodies, the camera.
+
+Several worlds can live in one process: nothing here touches PyBullet's implicit
+global client. Rendering uses TinyRenderer, whose depth buffer is exact float depth.
+
+Convention: world frame z up, x along the road, y left (see :mod:`sim.camera`).
+Instance ids: -1 = nothing (sky), 0 = static scenery, 1..N = vehicles in the order
+they were added.
+"""
+
+from __future__ import annotations
+
+import math
+import shutil
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pybullet as p
+from pybullet_utils import bullet_client
+
+from sim import textures
+from sim.camera import CameraConfig, view_matrix_gl
+from sim.scenery import RoadConfig, build_scenery
+from sim.vehicles import VehicleSpec, parts
+
+
+@dataclass
+class Render:
+    """One rendered frame at the camera's output resolution.
+
+    rgb: (H, W, 3) uint8. depth_m: (H, W) float32, depth Z along the optical axis [m]
+    (``far_m`` where nothing was hit). instance: (H, W) int32 (-1 sky, 0 static, >0 vehicle).
+    """
+
+    rgb: np.ndarray
+    depth_m: np.ndarray
+    instance: np.ndarray
+
+
+def _quat_z(heading_rad: float) -> list[float]:
+    return [0.0, 0.0, math.sin(heading_rad / 2), math.cos(heading_rad / 2)]
+
+
+class World:
+    """A PyBullet scene with a straight road, roadside structure and vehicles.
+
+    Args:
+        camera: the ego camera's image format and mounting.
+        road: the road layout.
+        seed: draws the scenery, textures and lighting.
+        light_direction: direction *towards* the light in the world frame; drawn from
+            ``seed`` when None.
+    """
+
+    def __init__(self, camera: CameraConfig, road: RoadConfig, seed: int, light_direction: tuple[float, float, float] | None = None):
+        self.camera = camera
+        self.road = road
+        self.rng = np.random.default_rng(seed)
+        self._tmp = Path(tempfile.mkdtemp(prefix="bittc_world_"))
+        self._n_textures = 0
+        self._client: bullet_client.BulletClient | None = bullet_client.BulletClient(connection_mode=p.DIRECT)
+        self._instance_of_uid: list[int] = []  # PyBullet body uid -> instance id
+        self._vehicle_uid: dict[int, int] = {}  # instance id -> body uid
+        self._vehicle_pose: dict[int, tuple[float, float, float]] = {}
+        self._vehicle_base_z: dict[int, float] = {}  # lower-body centre height [m]
+        if light_direction is None:
+            az = self.rng.uniform(0, 2 * math.pi)
+            el = self.rng.uniform(math.radians(25), math.radians(70))
+            light_direction = (math.cos(az) * math.cos(el), math.sin(az) * math.cos(el), math.sin(el))
+        self.light_direction = tuple(float(v) for v in light_direction)
+        self._sky = textures.sky_gradient(camera.height_px * camera.supersample, camera.width_px * camera.supersample, camera.height_px * camera.supersample * 0.5)
+        build_scenery(self, road, self.rng)
+
+    # ------------------------------------------------------------------ lifecycle
+    @property
+    def client(self) -> bullet_client.BulletClient:
+        if self._client is None:
+            raise RuntimeError("this World is closed")
+        return self._client
+
+    def close(self) -> None:
+        if self._client is not None:
+            self._client.disconnect()
+            self._client = None
+        shutil.rmtree(self._tmp, ignore_errors=True)
+
+    def __enter__(self) -> World:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def __del__(self) -> None:  # pragma: no cover - best effort
+        try:
+            self.close()
+        except Exception:
+            pass
+
+    # ------------------------------------------------------------------ building
+    def texture(self, image_rgb: np.ndarray) -> int:
+        """Load an (h, w, 3) uint8 RGB image as a texture; returns its id."""
+        path = self._tmp / f"tex{self._n_textures:05d}.png"
+        self._n_textures += 1
+        cv2.imwrite(str(path), cv2.cvtColor(image_rgb, cv2.COLOR_RGB2BGR))
+        return self.client.loadTexture(str(path))
+
+    def _register(self, uid: int, instance: int) -> None:
+        while len(self._instance_of_uid) <= uid:
+            self._instance_of_uid.append(-1)
+        self._instance_of_uid[uid] = instance
+
+    def add_static_box(self, center_m, half_extents_m, texture_id: int | None, rgb=(1.0, 1.0, 1.0)) -> int:
+        vs = self.client.createVisualShape(p.GEOM_BOX, halfExtents=list(half_extents_m), rgbaColor=[*rgb, 1.0])
+        uid = self.client.createMultiBody(0, -1, vs, basePosition=list(center_m))
+        if texture_id is not None:
+            self.client.changeVisualShape(uid, -1, textureUniqueId=texture_id)
+        self._register(uid, 0)
+        return uid
+
+    def add_static_sphere(self, center_m, radius_m: float, texture_id: int | None) -> int:
+        vs = self.client.createVisualShape(p.GEOM_SPHERE, radius=radius_m)
+        uid = self.client.createMultiBody(0, -1, vs, basePosition=list(center_m))
+        if texture_id is not None:
+            self.client.changeVisualShape(uid, -1, textureUniqueId=texture_id)
+        self._register(uid, 0)
+        return uid
+
+    def add_vehicle(self, spec: VehicleSpec) -> int:
+        """Add a multi-part vehicle body (hidden below ground until posed); returns its instance id."""
+        c = self.client
+        paint = self.texture(textures.vehicle_paint(self.rng, spec.color_rgb))
+        glass = self.texture(textures.tinted(self.rng, tuple(0.3 * np.asarray(spec.color_rgb) + 0.15), 0.4))
+        tyre = self.texture(textures.tinted(self.rng, (0.08, 0.08, 0.08), 0.5))
+        tex = {"paint": paint, "glass": glass, "tyre": tyre}
+        shapes, positions, orientations, tex_ids = [], [], [], []
+        wheel_q = c.getQuaternionFromEuler([math.pi / 2, 0, 0])
+        for part in parts(spec):
+            if part.shape == "box":
+                shapes.append(c.createVisualShape(p.GEOM_BOX, halfExtents=list(part.half_extents_m)))
+                orientations.append([0, 0, 0, 1])
+            else:
+                shapes.append(c.createVisualShape(p.GEOM_CYLINDER, radius=part.half_extents_m[0], length=2 * part.half_extents_m[1]))
+                orientations.append(list(wheel_q))
+            positions.append(list(part.center_m))
+            tex_ids.append(tex[part.texture])
+        n = len(shapes) - 1
+        # The base is the lower body placed at its own centre; links are relative to it.
+        base_pos = np.asarray(positions[0])
+        uid = c.createMultiBody(
+            0, -1, shapes[0], basePosition=[0, 0, -50.0],
+            baseInertialFramePosition=[0, 0, 0],
+            linkMasses=[0] * n, linkCollisionShapeIndices=[-1] * n, linkVisualShapeIndices=shapes[1:],
+            linkPositions=[list(np.asarray(q) - base_pos) for q in positions[1:]], linkOrientations=orientations[1:],
+            linkInertialFramePositions=[[0, 0, 0]] * n, linkInertialFrameOrientations=[[0, 0, 0, 1]] * n,
+            linkParentIndices=[0] * n, linkJointTypes=[p.JOINT_FIXED] * n, linkJointAxis=[[0, 0, 1]] * n,
+        )  # fmt: skip
+        for link, t in enumerate(tex_ids):
+            c.changeVisualShape(uid, link - 1, textureUniqueId=t)
+        instance = len(self._vehicle_uid) + 1
+        self._vehicle_uid[instance] = uid
+        self._vehicle_base_z[instance] = float(base_pos[2])
+        self._register(uid, instance)
+        return instance
+
+    # ------------------------------------------------------------------ state
+    def set_vehicle_pose(self, instance: int, x_m: float, y_m: float, heading_rad: float) -> None:
+        """Place a vehicle: footprint centre (x, y) on the ground, heading about z [rad]."""
+        uid = self._vehicle_uid[instance]
+        z = self._vehicle_base_z[instance]
+        self.client.resetBasePositionAndOrientation(uid, [x_m, y_m, z], _quat_z(heading_rad))
+        self._vehicle_pose[instance] = (float(x_m), float(y_m), float(heading_rad))
+
+    def vehicle_pose(self, instance: int) -> tuple[float, float, float]:
+        return self._vehicle_pose[instance]
+
+    @property
+    def instance_lut(self) -> np.ndarray:
+        """int32 array: PyBullet body uid -> instance id."""
+        return np.asarray(self._instance_of_uid, np.int32)
+
+    # ------------------------------------------------------------------ rendering
+    def render(self, cam_T_world: np.ndarray, with_rgb: bool = True) -> Render:
+        """Render the scene from an OpenCV camera pose ``cam_T_world`` (4x4)."""
+        cam = self.camera
+        view = view_matrix_gl(cam_T_world)
+        s = cam.supersample
+        flags = p.ER_SEGMENTATION_MASK_OBJECT_AND_LINKINDEX
+        if s == 1:
+            rgb, depth_buf, seg = self._raw(cam.width_px, cam.height_px, view, cam.projection_matrix_gl(1), flags)
+        else:
+            # Anti-aliased colour from a supersampled render; exact depth/instance from an
+            # output-resolution render whose samples sit at the output pixel centres.
+            if with_rgb:
+                hi, _, hseg = self._raw(cam.width_px * s, cam.height_px * s, view, cam.projection_matrix_gl(s), p.ER_NO_SEGMENTATION_MASK)
+                rgb = hi.reshape(cam.height_px, s, cam.width_px, s, 3).mean(axis=(1, 3)).round().astype(np.uint8)
+            _, depth_buf, seg = self._raw(cam.width_px, cam.height_px, view, cam.projection_matrix_gl(1), flags)
+            if not with_rgb:
+                rgb = None
+        obj = np.where(seg >= 0, seg & 0xFFFFFF, -1)
+        lut = self.instance_lut
+        instance = np.where(obj >= 0, lut[np.clip(obj, 0, len(lut) - 1)], -1).astype(np.int32)
+        depth = cam.linear_depth(depth_buf)
+        depth[instance < 0] = cam.far_m
+        return Render(rgb=rgb, depth_m=depth, instance=instance)
+
+    def _raw(self, w: int, h: int, view, proj, flags):
+        _, _, rgba, depth, seg = self.client.getCameraImage(
+            w, h, view, proj, renderer=p.ER_TINY_RENDERER, flags=flags, shadow=0,
+            lightDirection=list(self.light_direction), lightAmbientCoeff=0.6, lightDiffuseCoeff=0.5, lightSpecularCoeff=0.05,
+        )  # fmt: skip
+        rgb = np.asarray(rgba, np.uint8).reshape(h, w, 4)[..., :3].copy()
+        seg = np.asarray(seg, np.int64).reshape(h, w)
+        if flags != p.ER_NO_SEGMENTATION_MASK:
+            sky = seg < 0
+        else:
+            sky = np.asarray(depth).reshape(h, w) >= 1.0
+        sky_img = self._sky if self._sky.shape[0] == h else textures.sky_gradient(h, w, h * 0.5)
+        rgb[sky] = sky_img[sky]
+        return rgb, np.asarray(depth, np.float32).reshape(h, w), seg
