@@ -180,7 +180,7 @@ def _trace_row(sim: ScenarioSim, truth, active: BrakeCommand, decided: BrakeComm
 def _video_frame(image: np.ndarray, truth, active: BrakeCommand, sim: ScenarioSim, scale: int) -> np.ndarray:
     img = image
     if truth.gt is not None:
-        img = ttc_overlay(image, truth.gt.tau_s, truth.gt.valid)
+        img = ttc_overlay(image, truth.gt.tau_s, truth.gt.valid, truth.gt.instance)
     img = cv2.resize(img, (img.shape[1] * scale, img.shape[0] * scale), interpolation=cv2.INTER_NEAREST)
     crit = truth.critical
     ttc = f"{crit.ttc_s:.2f} s" if crit and math.isfinite(crit.ttc_s) else "inf"

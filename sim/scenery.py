@@ -60,8 +60,8 @@ def build_scenery(world: World, road: RoadConfig, rng: np.random.Generator) -> N
     yl, yr = road.y_left_edge_m, road.y_right_edge_m
     road_w = yl - yr
     asphalt = [world.texture(textures.asphalt(rng)) for _ in range(3)]
-    grass = [world.texture(textures.tinted(rng, (0.3, 0.45, 0.2), 0.7)) for _ in range(2)]
-    concrete = world.texture(textures.tinted(rng, (0.7, 0.7, 0.68), 0.3))
+    grass = [world.texture(textures.tinted(rng, (0.3, 0.45, 0.2), 1.0)) for _ in range(2)]
+    concrete = world.texture(textures.tinted(rng, (0.7, 0.7, 0.68), 0.7))
     n_seg = int(np.ceil((x1 - x0) / road.segment_m))
     for i in range(n_seg):
         xc = x0 + (i + 0.5) * road.segment_m

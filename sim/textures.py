@@ -10,16 +10,16 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-TEXTURE_SIZE_PX = 64
+TEXTURE_SIZE_PX = 128
 
 
-def smooth_noise(rng: np.random.Generator, size_px: int = TEXTURE_SIZE_PX, octaves: int = 4) -> np.ndarray:
+def smooth_noise(rng: np.random.Generator, size_px: int = TEXTURE_SIZE_PX, octaves: int = 5) -> np.ndarray:
     """(size, size) float32 noise in [0, 1], octaves of cubic-upsampled random grids."""
     out = np.zeros((size_px, size_px), np.float32)
     total = 0.0
     for k in range(octaves):
         cells = 2 ** (k + 2)
-        amp = 0.6**k
+        amp = 0.7**k
         grid = rng.random((cells, cells), dtype=np.float32)
         out += amp * cv2.resize(grid, (size_px, size_px), interpolation=cv2.INTER_CUBIC)
         total += amp
@@ -38,16 +38,19 @@ def tinted(rng: np.random.Generator, rgb: tuple[float, float, float], contrast: 
 
 def asphalt(rng: np.random.Generator) -> np.ndarray:
     grey = rng.uniform(0.25, 0.45)
-    return tinted(rng, (grey, grey, grey * 1.02), contrast=0.5)
+    return tinted(rng, (grey, grey, grey * 1.02), contrast=1.1)
 
 
 def vehicle_paint(rng: np.random.Generator, rgb: tuple[float, float, float]) -> np.ndarray:
     """Paint with panel shading, plus a dark band (windows/bumper) so faces have structure."""
-    img = tinted(rng, rgb, contrast=0.35).astype(np.float32)
+    img = tinted(rng, rgb, contrast=0.7).astype(np.float32)
     s = TEXTURE_SIZE_PX
     band = slice(int(s * rng.uniform(0.15, 0.3)), int(s * rng.uniform(0.4, 0.5)))
     img[band] *= 0.35
     img[int(s * 0.85) :] *= 0.5
+    lamp = int(s * 0.12)  # tail/head lamps near both side edges
+    for x0 in (int(s * 0.04), s - int(s * 0.04) - lamp):
+        img[int(s * 0.55) : int(s * 0.55) + lamp // 2, x0 : x0 + lamp] = (200, 30, 20)
     return np.clip(img, 0, 255).astype(np.uint8)
 
 

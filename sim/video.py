@@ -11,13 +11,16 @@ import numpy as np
 TTC_MAX_S = 4.0  # overlay colours 0 < tau <= TTC_MAX_S [s]; red = imminent
 
 
-def ttc_overlay(image_rgb: np.ndarray, tau_s: np.ndarray, valid: np.ndarray, alpha: float = 0.55) -> np.ndarray:
-    """Blend a red (0 s) -> yellow -> green (TTC_MAX_S) colour map over approaching pixels."""
+def ttc_overlay(image_rgb: np.ndarray, tau_s: np.ndarray, valid: np.ndarray, instance: np.ndarray,
+                alpha_actor: float = 0.6, alpha_static: float = 0.3) -> np.ndarray:  # fmt: skip
+    """Blend a red (0 s) -> yellow -> green (TTC_MAX_S) colour map over approaching pixels;
+    vehicles (instance > 0) more strongly than the static world."""
     out = image_rgb.astype(np.float32).copy()
     mask = valid & (tau_s > 0) & (tau_s <= TTC_MAX_S)
     t = np.clip(tau_s / TTC_MAX_S, 0, 1)
     color = np.stack([np.clip(2 - 2 * t, 0, 1), np.clip(2 * t, 0, 1), np.zeros_like(t)], axis=-1) * 255.0
-    out[mask] = (1 - alpha) * out[mask] + alpha * color[mask]
+    alpha = np.where(instance > 0, alpha_actor, alpha_static)[..., None]
+    out[mask] = (1 - alpha[mask]) * out[mask] + alpha[mask] * color[mask]
     return out.astype(np.uint8)
 
 
