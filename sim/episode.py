@@ -173,9 +173,21 @@ class ScenarioSim:
         critical = min(threats, key=lambda a: (a.ttc_s, a.gap_m)) if threats else None
         return StepTruth(self.t_s, float(self.ego.speed), actors, critical, collision=self.collision)
 
-    def min_distance_m(self) -> float:
-        ego = self._ego_corners()
-        return min((footprint_distance(ego, self._corners(a.vehicle, a.spec)) for a in self.actors), default=math.inf)
+    def min_distance_m(self, below_m: float = math.inf) -> float:
+        """Smallest footprint distance [m] from the ego to any actor; actors whose
+        bounding circles are already further than ``below_m`` are skipped."""
+        ex, ey, _ = self.ego.world_pose()
+        ego_r = 0.5 * math.hypot(EGO_SIZE_M[0], EGO_SIZE_M[1])
+        ego = None
+        best = math.inf
+        for a in self.actors:
+            ax, ay, _ = a.vehicle.world_pose()
+            lower = math.hypot(ax - ex, ay - ey) - ego_r - 0.5 * math.hypot(a.spec.length_m, a.spec.width_m)
+            if lower >= min(best, below_m):
+                continue
+            ego = self._ego_corners() if ego is None else ego
+            best = min(best, footprint_distance(ego, self._corners(a.vehicle, a.spec)))
+        return best
 
     # ------------------------------------------------------------------ camera
     def _camera_pose(self) -> np.ndarray:
@@ -221,8 +233,10 @@ class ScenarioSim:
         self.t_s = round(self.t_s + dt, 9)
         self.ego_braked |= self.ego.current_accel_mps2 < -0.5
         if self.collision is None:
-            self._check_collision()
-            self.min_gap_m = min(self.min_gap_m, self.min_distance_m())
+            d = self.min_distance_m(below_m=self.min_gap_m)
+            if d == 0.0:
+                self._check_collision()
+            self.min_gap_m = min(self.min_gap_m, d)
 
     def _check_collision(self) -> None:
         ego = self._ego_corners()

@@ -14,7 +14,7 @@ import sys
 
 from bittc_core.errors import CliError
 
-#: subcommand name -> module (imported lazily so `bittc --help` stays fast)
+#: subcommand name -> module; heavy imports (torch, pybullet) stay inside each run()
 COMMANDS: dict[str, str] = {
     "run": "bittc_core.cli.run_cmd",
     "scenarios": "bittc_core.cli.scenarios_cmd",

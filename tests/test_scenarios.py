@@ -1,0 +1,96 @@
+"""Closed-loop outcomes of the bundled scenarios, determinism, and scenario validation."""
+
+import json
+
+import pytest
+import yaml
+
+import controllers
+import scenarios
+from bittc_core.errors import ConfigError
+from sim.camera import CameraConfig
+from sim.runner import run_case
+
+CAM = CameraConfig()
+
+
+def outcome(name: str, controller: str) -> dict:
+    return run_case(scenarios.resolve(name)[0], controllers.make(controller), CAM, seed=0)
+
+
+def test_ccrs50_without_controller_collides_at_50():
+    s = outcome("CCRs-50", "none")
+    assert s["collision"] and s["impact_speed_kph"] == pytest.approx(50.0, abs=0.5)
+    assert s["relative_impact_speed_kph"] == pytest.approx(50.0, abs=0.5)
+
+
+def test_oracle_avoids_ccrs_ccrm_and_most_ccrb():
+    cat = scenarios.bundled()
+    for fam in ("CCRs", "CCRs-offset", "CCRm"):
+        for c in cat.families[fam]:
+            s = run_case(c, controllers.make("oracle"), CAM, seed=0)
+            assert not s["collision"], c.name
+            assert s["ttc_at_first_warning_s"] >= s["ttc_at_first_brake_s"] > 0, c.name
+    ccrb = [run_case(c, controllers.make("oracle"), CAM, seed=0) for c in cat.families["CCRb"]]
+    assert sum(not s["collision"] for s in ccrb) >= 3
+
+
+def test_no_benign_scenario_raises_an_alarm():
+    for c in scenarios.bundled().cases.values():
+        if not c.threat:
+            s = run_case(c, controllers.make("oracle"), CAM, seed=0)
+            assert not s["false_alarm"] and s["t_first_warning_s"] is None and not s["collision"], c.name
+
+
+def test_same_seed_gives_identical_outputs(tmp_path):
+    c = scenarios.resolve("cut-in")[0]
+    outs = []
+    for i in range(2):
+        d = tmp_path / f"r{i}"
+        run_case(c, controllers.make("oracle"), CAM, seed=7, out_dir=d)
+        summary = json.loads((d / "summary.json").read_text())
+        summary.pop("wall_time_s")
+        outs.append(((d / "trace.csv").read_bytes(), summary, (d / "config.yaml").read_bytes()))
+    assert outs[0] == outs[1]
+
+
+def test_sweep_expansion_and_names():
+    cat = scenarios.bundled()
+    assert [c.name for c in cat.families["CCRs"]] == [f"CCRs-{v}" for v in range(10, 90, 10)]
+    assert len(cat.families["CCRb"]) == 4
+    assert scenarios.resolve("CCRs-50")[0].ego.speed_kph == 50
+
+
+@pytest.mark.parametrize(
+    "patch,needle",
+    [
+        ({"ego": {"speed_kph": -10}}, "ego.speed_kph = -10"),
+        ({"actors": [{"vehicle": "gvt", "headway_s": 5, "overlap_pct": 120}]}, "overlap_pct = 120"),
+        ({"actors": [{"vehicle": "gvt", "headway_s": 0}]}, "headway_s = 0"),
+        ({"actors": [{"vehicle": "gvt", "headway_m": -3}]}, "headway_m = -3"),
+        ({"actors": [{"vehicle": "gvt", "headway_s": 5, "speeed_kph": 3}]}, "speeed_kph"),
+        ({"actors": [{"vehicle": "bus", "headway_s": 5}]}, "'bus'"),
+        ({"colour": "red"}, "colour"),
+        ({"ego": {"speed_kph": "fast"}}, "'fast'"),
+    ],
+)
+def test_bad_scenario_files_are_rejected_naming_file_key_value(tmp_path, patch, needle):
+    raw = {"name": "x", "threat": True, "ego": {"speed_kph": 50}, "actors": [{"vehicle": "gvt", "headway_s": 5}]}
+    raw.update(patch)
+    f = tmp_path / "bad.yaml"
+    f.write_text(yaml.safe_dump(raw))
+    with pytest.raises(ConfigError) as e:
+        scenarios.resolve(str(f))
+    assert str(f) in str(e.value) and needle in str(e.value)
+
+
+def test_unknown_scenario_suggests_close_names():
+    with pytest.raises(ConfigError, match="did you mean.*CCRs-50"):
+        scenarios.resolve("CCRs-5")
+
+
+def test_malformed_yaml(tmp_path):
+    f = tmp_path / "m.yaml"
+    f.write_text("name: [unclosed\n")
+    with pytest.raises(ConfigError, match="malformed YAML"):
+        scenarios.resolve(str(f))
