@@ -1,0 +1,15 @@
+"""Latency of the Binary-TTC estimator vs. K thresholds at 96x288, streaming, 2 threads.
+
+    python bench/bench_network.py [--config cpu-small] [--weights CKPT] [--calls 30]
+
+Prints a table; asserts nothing. Same code as ``bittc bench``.
+"""
+
+from __future__ import annotations
+
+import sys
+
+from bittc_core.cli import main
+
+if __name__ == "__main__":
+    sys.exit(main(["bench", *sys.argv[1:]]))

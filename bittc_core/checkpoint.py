@@ -1,0 +1,114 @@
+"""Checkpoints: save atomically, load safely, rebuild the network with no flags.
+
+Layout (a dict, loadable with ``torch.load(..., weights_only=True)``):
+    config       asdict(ModelConfig)
+    config_name  the registry name it was built from ("cpu-small", ...)
+    state_dict   the network weights
+    train_meta   {"step": int, "stage": str, "val_miou": float, "frame_dt_s": float, ...}
+    train_state  optional: optimizer / scheduler / RNG state for ``bittc train --resume``
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+import tempfile
+from pathlib import Path
+
+import torch
+
+from bittc_core.errors import CliError
+from bittc_core.model import CONFIGS, BinaryTTCNet, ModelConfig
+
+DEFAULT_WEIGHTS = Path(__file__).resolve().parent / "weights" / "bittc_default.pt"
+TRAIN_DEFAULT_HINT = (
+    "bittc train --data DIR --config cpu-small --stage all "
+    "--out bittc_core/weights/bittc_default.pt"
+)
+REQUIRED_KEYS = ("config", "config_name", "state_dict", "train_meta")
+
+
+class CheckpointError(CliError, ValueError):
+    """A checkpoint that is missing, corrupt, or of another config."""
+
+
+def save_checkpoint(path: str | os.PathLike, payload: dict) -> None:
+    """Write ``payload`` to ``path`` atomically (temp file in the same folder, rename)."""
+    missing = [k for k in REQUIRED_KEYS if k not in payload]
+    if missing:
+        raise ValueError(f"checkpoint payload lacks {missing}")
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    os.close(fd)
+    try:
+        torch.save(payload, tmp)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def make_payload(net: BinaryTTCNet, config_name: str, train_meta: dict,
+                 train_state: dict | None = None) -> dict:
+    payload = {
+        "config": dataclasses.asdict(net.config),
+        "config_name": config_name,
+        "state_dict": net.state_dict(),
+        "train_meta": dict(train_meta),
+    }
+    if train_state is not None:
+        payload["train_state"] = train_state
+    return payload
+
+
+def load_checkpoint(path: str | os.PathLike, map_location: str | torch.device = "cpu",
+                    expected_config: str | None = None) -> dict:
+    """Load and validate. ``expected_config``: the registry name the caller needs."""
+    path = Path(path)
+    if not path.is_file():
+        hint = f"; train it with `{TRAIN_DEFAULT_HINT}`" if path == DEFAULT_WEIGHTS else ""
+        raise CheckpointError(f"no checkpoint at {str(path)!r}{hint}")
+    try:
+        ckpt = torch.load(path, map_location=map_location, weights_only=True)
+    except Exception as err:  # pickle/zip errors of a truncated or foreign file
+        raise CheckpointError(f"cannot read checkpoint {str(path)!r}: corrupt or not a "
+                              f"bittc checkpoint ({type(err).__name__}: {err})") from None
+    if not isinstance(ckpt, dict) or any(k not in ckpt for k in REQUIRED_KEYS):
+        raise CheckpointError(f"checkpoint {str(path)!r} lacks the keys {list(REQUIRED_KEYS)}")
+    name = ckpt["config_name"]
+    try:
+        config = ModelConfig.from_dict(ckpt["config"])
+    except (TypeError, ValueError) as err:
+        raise CheckpointError(f"checkpoint {str(path)!r} has an invalid config: {err}") from None
+    if expected_config is not None:
+        if name != expected_config:
+            raise CheckpointError(f"checkpoint {str(path)!r} is of config {name!r}, "
+                                  f"not {expected_config!r}")
+        if expected_config in CONFIGS and CONFIGS[expected_config] != config:
+            raise CheckpointError(f"checkpoint {str(path)!r} says config {name!r} but its "
+                                  "sizes differ from the registered ones")
+    ckpt["model_config"] = config
+    return ckpt
+
+
+def build_network(ckpt: dict) -> BinaryTTCNet:
+    """A network with the checkpoint's config and weights (on the state_dict's device)."""
+    net = BinaryTTCNet(ckpt["model_config"])
+    try:
+        net.load_state_dict(ckpt["state_dict"])
+    except RuntimeError as err:
+        raise CheckpointError(f"checkpoint weights do not fit config "
+                              f"{ckpt['config_name']!r}: {str(err).splitlines()[0]}") from None
+    return net
+
+
+def pick_device(name: str = "auto") -> torch.device:
+    """"auto" -> cuda when available, else cpu; "cpu"/"cuda" as asked."""
+    if name == "auto":
+        return torch.device("cuda" if torch.cuda.is_available() else "cpu")
+    if name == "cuda" and not torch.cuda.is_available():
+        raise CliError("--device cuda: no CUDA device is available")
+    if name not in ("cpu", "cuda"):
+        raise CliError(f"device {name!r}: expected auto, cpu or cuda")
+    return torch.device(name)

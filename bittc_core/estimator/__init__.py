@@ -1,0 +1,29 @@
+"""Estimators of binary / quantized / continuous TTC behind one interface.
+
+``make_estimator("bittc" | "flow" | "oracle", weights=None, device="auto")``.
+"""
+
+from __future__ import annotations
+
+from bittc_core.estimator.base import Estimator, EstimatorInputError, quantize
+from bittc_core.estimator.flow import FlowBaselineConfig, FlowEstimator
+from bittc_core.estimator.network import BittcEstimator
+from bittc_core.estimator.oracle import OracleEstimator
+
+METHODS = ("bittc", "flow", "oracle")
+
+
+def make_estimator(method: str, weights: str | None = None, device: str = "auto") -> Estimator:
+    if method == "bittc":
+        return BittcEstimator.from_checkpoint(weights, device=device)
+    if weights is not None:
+        raise EstimatorInputError(f"--weights {weights!r} only applies to method 'bittc', not {method!r}")
+    if method == "flow":
+        return FlowEstimator()
+    if method == "oracle":
+        return OracleEstimator()
+    raise EstimatorInputError(f"unknown method {method!r}; expected one of {METHODS}")
+
+
+__all__ = ["Estimator", "EstimatorInputError", "quantize", "BittcEstimator", "FlowEstimator",
+           "FlowBaselineConfig", "OracleEstimator", "make_estimator", "METHODS"]

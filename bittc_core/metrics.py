@@ -1,0 +1,129 @@
+"""Evaluation metrics of binary and continuous TTC (numpy, one image at a time).
+
+Conventions: maps are (H, W) in the latest grid; ``valid`` marks pixels with exact
+ground truth; geofence class of a pixel for tau_i: inside = eta <= eta_i (with eta > 0),
+eta_i = tau_i / (tau_i + dt_s).
+
+* miou: BiTTC Table 1 protocol: for ``MIOU_LEVELS`` thresholds spaced uniformly in eta
+  for tau in [0.2 s, 2 s], the IoU of the inside class and of the outside class over
+  valid pixels, averaged over the two classes (a class absent from both prediction and
+  truth is skipped), then over thresholds and images.
+* mid: mean |log eta_hat - log eta| * 1e4 over valid pixels with |log eta| < log 2,
+  pooled over all such pixels of the data set.
+* error_rate: per threshold tau in ``ERROR_RATE_TAUS_S``, the share of valid pixels whose
+  class is wrong, pooled over the data set; keyed by f"{tau:g}" ("1", "2", "5").
+* actor_iou: like miou but only over valid pixels of moving actors (instance > 0), at
+  tau = 1 and 2 s, with intersections and unions pooled over the data set (actors are
+  often absent from an image) and averaged over the two classes.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from bittc_core.ttc import tau_to_eta
+
+MIOU_TAU_RANGE_S = (0.2, 2.0)
+MIOU_LEVELS = 10
+ERROR_RATE_TAUS_S = (1.0, 2.0, 5.0)
+ACTOR_TAUS_S = (1.0, 2.0)
+MID_MAX_LOG_ETA = float(np.log(2.0))
+MID_SCALE = 1e4
+
+
+def miou_thresholds_s(dt_s: float, levels: int = MIOU_LEVELS) -> np.ndarray:
+    """Thresholds [s] spanning MIOU_TAU_RANGE_S uniformly in eta."""
+    lo, hi = (tau_to_eta(t, dt_s) for t in MIOU_TAU_RANGE_S)
+    eta = np.linspace(lo, hi, levels)
+    return dt_s * eta / (1.0 - eta)
+
+
+def inside_geofence(eta: np.ndarray, eta_i: float) -> np.ndarray:
+    """Ground-truth class: 0 < tau <= tau_i <=> 0 < eta <= eta_i."""
+    with np.errstate(invalid="ignore"):
+        return (eta > 0) & (eta <= eta_i)
+
+
+def class_counts(pred: np.ndarray, truth: np.ndarray, mask: np.ndarray) -> np.ndarray:
+    """(2, 2) [[intersection, union] of inside, [..] of outside] over ``mask``."""
+    p, t = pred[mask], truth[mask]
+    return np.array([[np.sum(p & t), np.sum(p | t)], [np.sum(~p & ~t), np.sum(~p | ~t)]],
+                    dtype=np.int64)
+
+
+def two_class_iou(counts: np.ndarray) -> float:
+    """Mean IoU of the classes with a non-empty union; nan if none."""
+    ious = [i / u for i, u in counts if u > 0]
+    return float(np.mean(ious)) if ious else float("nan")
+
+
+def mid_terms(eta_hat: np.ndarray, eta: np.ndarray, valid: np.ndarray) -> tuple[float, int]:
+    """(sum of |log eta_hat - log eta|, pixel count) over the MiD pixels."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        log_eta = np.log(eta)
+        mask = valid & np.isfinite(log_eta) & (np.abs(log_eta) < MID_MAX_LOG_ETA)
+        err = np.abs(np.log(np.maximum(eta_hat[mask], 1e-6)) - log_eta[mask])
+    return float(err.sum()), int(mask.sum())
+
+
+@dataclass
+class MetricAccumulator:
+    """Feed one image at a time with ``add``; ``result()`` gives the JSON-ready dict."""
+
+    dt_s: float
+    miou_thresholds_s: np.ndarray = field(init=False)
+    _ious: list = field(default_factory=list)
+    _mid_sum: float = 0.0
+    _mid_count: int = 0
+    _errors: dict = field(default_factory=dict)
+    _actor: dict = field(default_factory=dict)
+    _latency_ms: list = field(default_factory=list)
+
+    def __post_init__(self) -> None:
+        self.miou_thresholds_s = miou_thresholds_s(self.dt_s)
+        self._errors = {t: [0, 0] for t in ERROR_RATE_TAUS_S}
+        self._actor = {t: np.zeros((2, 2), np.int64) for t in ACTOR_TAUS_S}
+
+    @property
+    def thresholds_s(self) -> np.ndarray:
+        """All thresholds [s] whose geofence maps ``add`` expects, in this order."""
+        return np.concatenate([self.miou_thresholds_s, ERROR_RATE_TAUS_S])
+
+    def add(self, prob: np.ndarray, eta_hat: np.ndarray | None, eta: np.ndarray,
+            valid: np.ndarray, instance: np.ndarray, latency_ms: float | None = None) -> None:
+        """prob: (K, H, W) geofence probabilities for ``thresholds_s``; eta_hat: (H, W) or None."""
+        if prob.shape[0] != len(self.thresholds_s):
+            raise ValueError(f"expected {len(self.thresholds_s)} maps, got {prob.shape[0]}")
+        pred = prob > 0.5
+        n = len(self.miou_thresholds_s)
+        ious = [two_class_iou(class_counts(pred[i], inside_geofence(eta, tau_to_eta(t, self.dt_s)), valid))
+                for i, t in enumerate(self.miou_thresholds_s)]
+        ious = [x for x in ious if np.isfinite(x)]
+        if ious:
+            self._ious.append(float(np.mean(ious)))
+        actors = valid & (instance > 0)
+        for j, t in enumerate(ERROR_RATE_TAUS_S):
+            truth = inside_geofence(eta, tau_to_eta(t, self.dt_s))
+            self._errors[t][0] += int(np.sum(pred[n + j][valid] != truth[valid]))
+            self._errors[t][1] += int(valid.sum())
+            if t in self._actor:
+                self._actor[t] += class_counts(pred[n + j], truth, actors)
+        if eta_hat is not None:
+            s, c = mid_terms(eta_hat, eta, valid)
+            self._mid_sum += s
+            self._mid_count += c
+        if latency_ms is not None:
+            self._latency_ms.append(latency_ms)
+
+    def result(self) -> dict:
+        nan = float("nan")
+        return {
+            "miou": float(np.mean(self._ious)) if self._ious else nan,
+            "mid": self._mid_sum / self._mid_count * MID_SCALE if self._mid_count else nan,
+            "error_rate": {f"{t:g}": (e / n if n else nan) for t, (e, n) in self._errors.items()},
+            "actor_iou": {f"{t:g}": two_class_iou(c) for t, c in self._actor.items()},
+            "latency_ms": float(np.mean(self._latency_ms)) if self._latency_ms else nan,
+            "images": len(self._ious),
+        }

@@ -1,0 +1,136 @@
+"""Model configs: one frozen dataclass, a registry of named sizes.
+
+A checkpoint stores ``asdict(config)`` and its name, so a network is rebuilt from the
+checkpoint alone (``ModelConfig.from_dict``), with no flags.
+
+Conventions shared by every config (see ``bittc_core.model.network``):
+    * input frames are 3-channel images in [0, 1] whose height and width are
+      multiples of 3 px (the features live at 1/3 resolution);
+    * ``frame_dt_s`` is the frame interval the network was trained for: a threshold
+      tau_i [s] becomes eta_i = tau_i / (tau_i + frame_dt_s);
+    * geofence thresholds outside [tau_min_s, tau_max_s] are rejected by the estimator;
+    * continuous mode stacks ``cont_levels`` maps at eta thresholds spaced uniformly
+      over [cont_eta_min, cont_eta_max] (bin centres, see ``model.auc``).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass, field
+
+NORMS = ("none", "batch", "group")
+
+
+@dataclass(frozen=True)
+class ModelConfig:
+    # FeatExtractNet (PSMNet-style, output at 1/3 resolution)
+    stem_channels: int = 32  # channels of the stride-3 stem
+    feat_channels: int = 32  # channels of the output feature map
+    feat_res_blocks: int = 4  # residual blocks at 1/3 resolution
+    spp_pool_sizes: tuple[int, ...] = (16, 8, 4, 2)  # average-pool windows [feature px]
+    spp_channels: int = 16  # channels of each pyramid branch
+    # SegNet2D (encoder-decoder with skip connections)
+    enc_channels: tuple[int, ...] = (128, 256, 512, 1024, 1024)
+    dec_channels: tuple[int, ...] = (1024, 512, 256, 128, 64)  # coarse to fine
+    full_res_skip: bool = True  # last decoder block also sees the input volume
+    pad_factor: float = 1.5  # features are zero-padded to this multiple of their size
+    # SegRefineNet (guided by the reference image)
+    guide_channels: int = 16
+    refine_channels: int = 8
+    refine_layers: int = 4
+    # ContRefineNet (StereoNet-style refinement of the AUC output)
+    cont_channels: int = 32
+    cont_dilations: tuple[int, ...] = (1, 2, 4, 8, 1, 1)
+    # normalisation layers: "none" (the paper), "batch" or "group"
+    norm: str = "none"
+    # trained ranges
+    frame_dt_s: float = 0.1  # [s] frame interval the network was trained at
+    tau_min_s: float = 0.2  # [s] smallest geofence threshold accepted
+    tau_max_s: float = 10.0  # [s] largest geofence threshold accepted
+    max_shift_px: float = 30.0  # [px of the input] largest binary-flow shift trained
+    cont_eta_min: float = 0.6  # lowest eta of the continuous volume
+    cont_eta_max: float = 1.2  # highest eta of the continuous volume
+    cont_levels: int = 24  # number of maps stacked in continuous mode
+
+    def __post_init__(self) -> None:
+        if self.norm not in NORMS:
+            raise ValueError(f"ModelConfig.norm={self.norm!r}: expected one of {NORMS}")
+        if len(self.enc_channels) != len(self.dec_channels) or not self.enc_channels:
+            raise ValueError(
+                f"ModelConfig: enc_channels {self.enc_channels} and dec_channels "
+                f"{self.dec_channels} must be non-empty and of equal length"
+            )
+        if not 0.0 < self.tau_min_s < self.tau_max_s:
+            raise ValueError(f"ModelConfig: bad tau range [{self.tau_min_s}, {self.tau_max_s}] s")
+        if not 0.0 < self.cont_eta_min < self.cont_eta_max or self.cont_levels < 2:
+            raise ValueError(
+                f"ModelConfig: bad continuous volume eta [{self.cont_eta_min}, "
+                f"{self.cont_eta_max}] x {self.cont_levels} levels"
+            )
+        if self.pad_factor < 1.0:
+            raise ValueError(f"ModelConfig.pad_factor={self.pad_factor}: must be >= 1")
+
+    @property
+    def down_factor(self) -> int:
+        """The padded feature map must be divisible by this (one /2 per encoder block)."""
+        return 2 ** len(self.enc_channels)
+
+    @classmethod
+    def from_dict(cls, values: dict) -> "ModelConfig":
+        """Rebuild from ``asdict(config)``; unknown keys are an error, lists -> tuples."""
+        names = {f.name: f for f in dataclasses.fields(cls)}
+        unknown = sorted(set(values) - set(names))
+        if unknown:
+            raise ValueError(f"ModelConfig: unknown keys {unknown}")
+        fixed = {k: tuple(v) if isinstance(v, list) else v for k, v in values.items()}
+        return cls(**fixed)
+
+
+#: name -> config. ``paper``: the paper's sizes, no normalisation (~91 M params).
+#: ``cpu-small``: the CPU default (slim extractor, narrow 4-level SegNet, batch norm,
+#: one hidden refine layer), tuned with ``bittc bench`` on 2 cores at 96x288: ~10 ms for
+#: one threshold in streaming mode, ~3 ms per extra threshold.
+#: ``tiny``: unit tests only.
+CONFIGS: dict[str, ModelConfig] = {
+    "paper": ModelConfig(),
+    "cpu-small": ModelConfig(
+        stem_channels=16,
+        feat_channels=16,
+        feat_res_blocks=2,
+        spp_pool_sizes=(8, 4, 2),
+        spp_channels=8,
+        enc_channels=(16, 32, 48, 64),
+        dec_channels=(48, 32, 16, 16),
+        full_res_skip=False,
+        guide_channels=8,
+        refine_channels=8,
+        refine_layers=1,
+        cont_channels=16,
+        cont_dilations=(1, 2, 4, 1),
+        norm="batch",
+    ),
+    "tiny": ModelConfig(
+        stem_channels=8,
+        feat_channels=8,
+        feat_res_blocks=1,
+        spp_pool_sizes=(4, 2),
+        spp_channels=4,
+        enc_channels=(8, 12),
+        dec_channels=(12, 8),
+        full_res_skip=True,
+        guide_channels=4,
+        refine_channels=4,
+        refine_layers=2,
+        cont_channels=8,
+        cont_dilations=(1, 2),
+        norm="batch",
+        cont_levels=8,
+    ),
+}
+
+
+def get_config(name: str) -> ModelConfig:
+    try:
+        return CONFIGS[name]
+    except KeyError:
+        raise ValueError(f"unknown model config {name!r}; known: {sorted(CONFIGS)}") from None

@@ -1,0 +1,46 @@
+"""Small building blocks shared by the network files."""
+
+from __future__ import annotations
+
+import math
+
+from torch import nn
+
+LEAKY_SLOPE = 0.1  # LeakyReLU slope used throughout (paper, Supp. A)
+
+
+def make_norm(norm: str, channels: int) -> nn.Module:
+    """"none" -> identity, "batch" -> BatchNorm2d, "group" -> GroupNorm (<= 8 groups)."""
+    if norm == "none":
+        return nn.Identity()
+    if norm == "batch":
+        return nn.BatchNorm2d(channels)
+    if norm == "group":
+        return nn.GroupNorm(math.gcd(8, channels), channels)
+    raise ValueError(f"unknown norm {norm!r}")
+
+
+def conv(in_ch: int, out_ch: int, kernel: int = 3, stride: int = 1, dilation: int = 1,
+         bias: bool = True) -> nn.Conv2d:
+    """A 'same'-padded convolution (for odd kernels)."""
+    return nn.Conv2d(in_ch, out_ch, kernel, stride=stride, padding=dilation * (kernel // 2),
+                     dilation=dilation, bias=bias)
+
+
+class ConvNormAct(nn.Sequential):
+    """conv -> norm -> LeakyReLU(0.1); the conv has a bias only when there is no norm."""
+
+    def __init__(self, in_ch: int, out_ch: int, *, kernel: int = 3, stride: int = 1,
+                 dilation: int = 1, norm: str = "none", act: bool = True) -> None:
+        super().__init__(
+            conv(in_ch, out_ch, kernel, stride, dilation, bias=norm == "none"),
+            make_norm(norm, out_ch),
+            nn.LeakyReLU(LEAKY_SLOPE, inplace=True) if act else nn.Identity(),
+        )
+
+
+class NormAct(nn.Sequential):
+    """norm -> LeakyReLU(0.1), for sums of split convolutions."""
+
+    def __init__(self, channels: int, norm: str) -> None:
+        super().__init__(make_norm(norm, channels), nn.LeakyReLU(LEAKY_SLOPE, inplace=True))

@@ -1,0 +1,135 @@
+"""BinaryTTCNet: the composition of FeatExtractNet, warp, SegNet2D and the refiners.
+
+Convention: ``image_prev`` (t0) is the source (warped), ``image_latest`` (t1) the
+reference; every output lives in the latest frame's pixel grid. Images are
+(B, 3, H, W) in [0, 1], H and W multiples of 3 px.
+
+Outputs are logits of
+    * TTC head:  P_i = p(eta <= eta_i) = p(0 < tau <= tau_i) (the geofence; the paper's
+      B_tau = p(tau > tau_i) is its complement 1 - P_i),
+    * flow heads: p(u > u_i), p(v > v_i) with (u, v) [px] the displacement from the
+      previous to the latest position (x_prev = x_latest - (u, v)).
+
+Cost split for streaming and for many thresholds: ``extract`` runs once per frame
+(cache it), ``prepare_reference`` once per (reference frame) and the classify calls
+once per batch of hypotheses, all hypotheses stacked along the batch dimension.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import torch
+import torch.nn.functional as F
+from torch import nn
+
+from bittc_core.model.auc import auc_eta, uniform_levels
+from bittc_core.model.config import ModelConfig
+from bittc_core.model.cont_refine import ContRefineNet
+from bittc_core.model.extractor import FeatExtractNet
+from bittc_core.model.refine import SegRefineNet
+from bittc_core.model.segnet import HEAD_TTC, HEAD_U, HEAD_V, ReferenceTerms, SegNet2D
+from bittc_core.model.warp import PaddedGrid, scale_warp, shift_warp
+
+FEATURE_STRIDE = 3  # [input px per feature px]
+
+
+@dataclass
+class ReferenceContext:
+    """Everything about the reference (latest) frame that no hypothesis changes."""
+
+    image: torch.Tensor  # (B, 3, H, W)
+    grid: PaddedGrid
+    terms: ReferenceTerms
+    guide: torch.Tensor  # (B, refine_ch, H, W)
+
+
+@dataclass
+class ContinuousOutput:
+    levels: torch.Tensor  # (K,) eta bin centres
+    prob_le: torch.Tensor  # (B, K, H, W) p(eta <= eta_i)
+    eta_auc: torch.Tensor  # (B, 1, H, W) AUC estimate
+    log_eta: torch.Tensor  # (B, 1, H, W) refined log eta
+
+
+class BinaryTTCNet(nn.Module):
+    def __init__(self, config: ModelConfig) -> None:
+        super().__init__()
+        self.config = config
+        c = config
+        self.features = FeatExtractNet(
+            stem_channels=c.stem_channels, out_channels=c.feat_channels,
+            res_blocks=c.feat_res_blocks, pool_sizes=c.spp_pool_sizes,
+            spp_channels=c.spp_channels, norm=c.norm,
+        )
+        self.segnet = SegNet2D(
+            feat_channels=c.feat_channels, enc_channels=c.enc_channels,
+            dec_channels=c.dec_channels, full_res_skip=c.full_res_skip, norm=c.norm,
+        )
+        self.refine = SegRefineNet(guide_channels=c.guide_channels,
+                                   channels=c.refine_channels, layers=c.refine_layers)
+        self.cont_refine = ContRefineNet(channels=c.cont_channels,
+                                         dilations=c.cont_dilations, norm=c.norm)
+
+    # -- per frame ------------------------------------------------------------------
+    def extract(self, images: torch.Tensor) -> torch.Tensor:
+        """(B, 3, H, W) -> (B, C, H/3, W/3)."""
+        h, w = images.shape[-2:]
+        if h % FEATURE_STRIDE or w % FEATURE_STRIDE:
+            raise ValueError(f"image size {h}x{w} px: height and width must be multiples of 3")
+        return self.features(images)
+
+    def prepare_reference(self, feat_ref: torch.Tensor, image_ref: torch.Tensor) -> ReferenceContext:
+        h, w = feat_ref.shape[-2:]
+        grid = PaddedGrid.for_features(h, w, self.config.pad_factor, self.config.down_factor)
+        terms = self.segnet.prepare(grid.pad(feat_ref))
+        return ReferenceContext(image=image_ref, grid=grid, terms=terms,
+                                guide=self.refine.guide(image_ref))
+
+    # -- per hypothesis ---------------------------------------------------------------
+    def _coarse(self, ctx: ReferenceContext, warped: torch.Tensor) -> torch.Tensor:
+        """(B*K, C, hp, wp) -> logits (B*K, 3, H, W) at input resolution."""
+        logits = self.segnet(ctx.terms, warped, ctx.grid)
+        return F.interpolate(logits, size=ctx.image.shape[-2:], mode="bilinear", align_corners=False)
+
+    def classify_eta(self, ctx: ReferenceContext, feat_src: torch.Tensor,
+                     eta: torch.Tensor) -> torch.Tensor:
+        """eta thresholds (B, K) -> refined logits of p(eta <= eta_i), (B, K, H, W)."""
+        b, k = eta.shape
+        coarse = self._coarse(ctx, scale_warp(feat_src, eta, ctx.grid))[:, HEAD_TTC:HEAD_TTC + 1]
+        coarse = coarse.view(b, k, *coarse.shape[-2:])
+        # the full-resolution refiner runs one threshold at a time: on a CPU a batch of
+        # full-size maps falls out of cache and costs ~2x more per map (96x288, 2 cores)
+        refined = [self.refine(ctx.guide, coarse[:, i:i + 1]) for i in range(k)]
+        return torch.cat(refined, dim=1)
+
+    def classify_shift(self, ctx: ReferenceContext, feat_src: torch.Tensor,
+                       shift_px: torch.Tensor) -> torch.Tensor:
+        """shifts (B, K, 2) [input px] -> logits of p(u > u_i), p(v > v_i), (B, K, 2, H, W)."""
+        b, k, _ = shift_px.shape
+        coarse = self._coarse(ctx, shift_warp(feat_src, shift_px / FEATURE_STRIDE, ctx.grid))
+        return coarse[:, HEAD_U:HEAD_V + 1].reshape(b, k, 2, *coarse.shape[-2:])
+
+    def continuous(self, ctx: ReferenceContext, feat_src: torch.Tensor) -> ContinuousOutput:
+        """Stack ``cont_levels`` maps on uniform eta bins, AUC, then ContRefineNet."""
+        c = self.config
+        b = feat_src.shape[0]
+        levels = uniform_levels(c.cont_eta_min, c.cont_eta_max, c.cont_levels, device=feat_src.device)
+        prob_le = torch.sigmoid(self.classify_eta(ctx, feat_src, levels.expand(b, -1)))
+        eta_auc = auc_eta(prob_le, c.cont_eta_min, c.cont_eta_max)
+        log_eta = self.cont_refine(torch.log(eta_auc), ctx.image)
+        return ContinuousOutput(levels=levels, prob_le=prob_le, eta_auc=eta_auc, log_eta=log_eta)
+
+    # -- convenience ----------------------------------------------------------------
+    def forward(self, image_prev: torch.Tensor, image_latest: torch.Tensor,
+                eta: torch.Tensor) -> torch.Tensor:
+        """One pass without caching: eta (B, K) -> logits of p(eta <= eta_i), (B, K, H, W).
+        Both frames go through the extractor as one batch (shared weights)."""
+        b = image_prev.shape[0]
+        feats = self.extract(torch.cat((image_prev, image_latest), dim=0))
+        ctx = self.prepare_reference(feats[b:], image_latest)
+        return self.classify_eta(ctx, feats[:b], eta)
+
+
+def count_parameters(module: nn.Module) -> int:
+    return sum(p.numel() for p in module.parameters())

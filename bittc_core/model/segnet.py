@@ -1,0 +1,133 @@
+"""SegNet2D: encoder-decoder with skip connections over [f_ref, P_phi(f_src)].
+
+Encoder: blocks of (3x3 conv stride 2, 3x3 conv), one /2 per block. Decoder: blocks of
+(4x4 deconv stride 2, 3x3 conv over [upsampled, skip]); the skip of the finest block
+is the input volume itself (``full_res_skip``). A final 3x3 conv gives three logits per
+pixel: binary TTC, binary flow u, binary flow v (paper Supp. A).
+
+Split convolutions (field notes): a conv over a channel concatenation is the sum of
+convs over the parts, conv([a, b]) = conv_a(a) + conv_b(b). The reference part of the
+first encoder conv (and of the full-resolution skip conv) does not depend on the
+hypothesis, so ``prepare`` computes it once per frame pair and ``forward`` adds it to
+the warped part of every hypothesis (broadcast, no copy).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import torch
+from torch import nn
+
+from bittc_core.model.layers import LEAKY_SLOPE, ConvNormAct, NormAct, conv, make_norm
+from bittc_core.model.warp import PaddedGrid
+
+NUM_HEADS = 3  # ttc, flow u, flow v
+HEAD_TTC, HEAD_U, HEAD_V = 0, 1, 2
+
+
+@dataclass
+class ReferenceTerms:
+    """Hypothesis-independent partial sums, each (B, C, h, w)."""
+
+    first: torch.Tensor
+    skip: torch.Tensor | None
+
+
+@dataclass(frozen=True)
+class _MarginBox:
+    """The unpadded map of a ``PaddedGrid`` grown by up to ``margin`` px a side."""
+
+    top: int
+    left: int
+    bottom: int  # exclusive
+    right: int  # exclusive
+    inner_top: int
+    inner_left: int
+    h: int
+    w: int
+
+    @classmethod
+    def around(cls, grid: PaddedGrid, margin: int) -> "_MarginBox":
+        top, left = max(grid.top - margin, 0), max(grid.left - margin, 0)
+        bottom = min(grid.top + grid.h + margin, grid.hp)
+        right = min(grid.left + grid.w + margin, grid.wp)
+        return cls(top, left, bottom, right, grid.top - top, grid.left - left, grid.h, grid.w)
+
+    def cut(self, x: torch.Tensor) -> torch.Tensor:
+        return x[..., self.top:self.bottom, self.left:self.right]
+
+    def inner(self, x: torch.Tensor) -> torch.Tensor:
+        return x[..., self.inner_top:self.inner_top + self.h, self.inner_left:self.inner_left + self.w]
+
+
+def _broadcast_add(ref: torch.Tensor, per_hyp: torch.Tensor) -> torch.Tensor:
+    """ref (B, C, h, w) + per_hyp (B*K, C, h, w) -> (B*K, C, h, w) without repeating ref."""
+    b = ref.shape[0]
+    k = per_hyp.shape[0] // b
+    out = per_hyp.view(b, k, *per_hyp.shape[1:]) + ref[:, None]
+    return out.view(b * k, *per_hyp.shape[1:])
+
+
+class SegNet2D(nn.Module):
+    def __init__(self, *, feat_channels: int, enc_channels: tuple[int, ...],
+                 dec_channels: tuple[int, ...], full_res_skip: bool, norm: str) -> None:
+        super().__init__()
+        e, d = enc_channels, dec_channels
+        levels = len(e)
+        has_bias = norm == "none"
+        self.first_ref = conv(feat_channels, e[0], stride=2, bias=has_bias)
+        self.first_src = conv(feat_channels, e[0], stride=2, bias=False)
+        self.first_post = NormAct(e[0], norm)
+        self.first_conv2 = ConvNormAct(e[0], e[0], norm=norm)
+        self.down = nn.ModuleList(
+            nn.Sequential(ConvNormAct(e[i - 1], e[i], stride=2, norm=norm),
+                          ConvNormAct(e[i], e[i], norm=norm))
+            for i in range(1, levels)
+        )
+        self.up = nn.ModuleList()
+        self.fuse = nn.ModuleList()
+        prev = e[-1]
+        for i in range(levels):
+            self.up.append(nn.Sequential(
+                nn.ConvTranspose2d(prev, d[i], 4, stride=2, padding=1, bias=has_bias),
+                make_norm(norm, d[i]),
+                nn.LeakyReLU(LEAKY_SLOPE, inplace=True),
+            ))
+            if i < levels - 1:
+                self.fuse.append(ConvNormAct(d[i] + e[levels - 2 - i], d[i], norm=norm))
+            prev = d[i]
+        # finest block: conv over [upsampled, (f_ref, warped f_src)] split in parts
+        self.full_res_skip = full_res_skip
+        self.last_dec = conv(d[-1], d[-1], bias=has_bias)
+        if full_res_skip:
+            self.last_ref = conv(feat_channels, d[-1], bias=False)
+            self.last_src = conv(feat_channels, d[-1], bias=False)
+        self.last_post = NormAct(d[-1], norm)
+        self.head = conv(d[-1], NUM_HEADS)
+
+    def prepare(self, ref_padded: torch.Tensor) -> ReferenceTerms:
+        """Once per reference frame: the reference parts of the split convs."""
+        skip = self.last_ref(ref_padded) if self.full_res_skip else None
+        return ReferenceTerms(first=self.first_ref(ref_padded), skip=skip)
+
+    def forward(self, ref: ReferenceTerms, warped: torch.Tensor, grid: PaddedGrid) -> torch.Tensor:
+        """warped (B*K, C, hp, wp) -> logits (B*K, 3, h, w), cropped to the unpadded map.
+
+        The last two 3x3 convs only run on the crop plus a 2-px margin: the result
+        inside is exactly that of running them on the whole padded map (the margin
+        covers their receptive field; beyond the padded map both see zeros)."""
+        x = self.first_post(_broadcast_add(ref.first, self.first_src(warped)))
+        skips = [self.first_conv2(x)]
+        for block in self.down:
+            skips.append(block(skips[-1]))
+        x = skips.pop()
+        for i, up in enumerate(self.up):
+            x = up(x)
+            if i < len(self.fuse):
+                x = self.fuse[i](torch.cat((x, skips.pop()), dim=1))
+        box = _MarginBox.around(grid, margin=2)
+        x = self.last_dec(box.cut(x))
+        if self.full_res_skip:
+            x = _broadcast_add(box.cut(ref.skip), x + self.last_src(box.cut(warped)))
+        return box.inner(self.head(self.last_post(x)))

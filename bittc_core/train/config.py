@@ -1,0 +1,42 @@
+"""Training configuration (one frozen dataclass; the CLI fills it from its flags)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+STAGES = ("flow", "binary", "continuous")
+
+
+@dataclass(frozen=True)
+class TrainConfig:
+    stage: str = "binary"  # one of STAGES
+    steps: int = 2000  # optimiser steps of this stage
+    batch_size: int = 8  # image pairs per step
+    lr: float = 3e-4  # peak AdamW learning rate (field notes: 1e-3 flat collapsed)
+    weight_decay: float = 1e-4
+    warmup_steps: int = 200  # linear warm-up, then cosine decay to ``lr * final_lr_ratio``
+    final_lr_ratio: float = 0.1
+    clip_grad_norm: float = 1.0
+    thresholds_per_pair: int = 4  # eta hypotheses per image pair (binary stage)
+    shifts_per_pair: int = 2  # (u, v) shift hypotheses per image pair
+    train_tau_min_s: float = 0.2  # [s] thresholds: eta uniform in [eta(tau_min), eta_max]
+    train_eta_max: float = 1.1  # > 1: receding thresholds too (their negatives matter)
+    ttc_weight: float = 0.8  # paper: binary TTC 0.8, binary flow 0.2
+    flow_weight: float = 0.2
+    cont_bce_weight: float = 0.1  # paper: BCE on the stacked maps 0.1, SmoothL1 on AUC 0.9
+    cont_sl1_weight: float = 0.9
+    val_every: int = 250  # steps between validations (and checkpoints)
+    val_limit: int = 64  # validation pairs
+    log_every: int = 10  # steps between CSV rows
+    num_workers: int = 0  # DataLoader workers
+    seed: int = 0
+
+    def __post_init__(self) -> None:
+        if self.stage not in STAGES:
+            raise ValueError(f"stage {self.stage!r}: expected one of {STAGES}")
+        for name in ("steps", "batch_size", "thresholds_per_pair", "shifts_per_pair",
+                     "val_every", "val_limit", "log_every"):
+            if getattr(self, name) <= 0:
+                raise ValueError(f"{name}={getattr(self, name)}: must be > 0")
+        if self.lr <= 0 or self.clip_grad_norm <= 0:
+            raise ValueError("lr and clip_grad_norm must be > 0")

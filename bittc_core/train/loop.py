@@ -1,0 +1,200 @@
+"""The training loop of one stage (paper Sec. 4.4 and Supp. B).
+
+Stages: ``flow``: binary-flow pre-training, TTC head unsupervised; ``binary``: binary
+TTC (several eta thresholds per pair) + binary flow auxiliary, weights 0.8 / 0.2;
+``continuous``: the stacked TTC volume, BCE on its maps (0.1) + SmoothL1 on the AUC and
+refined log eta (0.9), still with the flow auxiliary (0.8 / 0.2).
+AdamW, linear warm-up then cosine decay, gradient clipping; validation every
+``val_every`` steps keeps the best checkpoint by val mIoU at ``paths.best``; a
+resumable checkpoint (optimizer, step, RNG states) goes to ``paths.last``; a CSV row
+every ``log_every`` steps to ``paths.csv``.
+"""
+
+from __future__ import annotations
+
+import csv
+import dataclasses
+import math
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import torch
+from torch.utils.data import DataLoader, Dataset
+from tqdm import tqdm
+
+from bittc_core.checkpoint import load_checkpoint, make_payload, save_checkpoint
+from bittc_core.model import BinaryTTCNet
+from bittc_core.model.auc import auc_eta
+from bittc_core.train.config import TrainConfig
+from bittc_core.train.losses import masked_bce, masked_smooth_l1
+from bittc_core.train.targets import eta_labels, sample_eta, sample_shifts_px, shift_labels, valid_mask
+from bittc_core.train.validate import validate
+
+CSV_FIELDS = ("step", "stage", "loss", "loss_ttc", "loss_flow", "loss_cont", "lr", "grad_norm",
+              "s_per_step", "val_miou", "val_mid")
+
+
+@dataclass(frozen=True)
+class RunPaths:
+    """Files of a run, all beside the best checkpoint ``best`` (the --out path)."""
+
+    best: Path
+    last: Path
+    csv: Path
+    config: Path
+
+    @classmethod
+    def from_out(cls, out: str | Path) -> "RunPaths":
+        out = Path(out)
+        stem = out.with_suffix("")
+        return cls(best=out, last=stem.with_name(stem.name + ".last.pt"),
+                   csv=stem.with_suffix(".csv"), config=stem.with_name(stem.name + ".config.yaml"))
+
+
+def _forever(loader: DataLoader):
+    while True:
+        yield from loader
+
+
+class Trainer:
+    def __init__(self, net: BinaryTTCNet, config_name: str, cfg: TrainConfig,
+                 train_set: Dataset, val_set: Dataset, device: torch.device, paths: RunPaths,
+                 meta: dict | None = None) -> None:
+        self.net = net.to(device)
+        self.config_name = config_name
+        self.cfg = cfg
+        self.device = device
+        self.paths = paths
+        self.meta = dict(meta or {})
+        self.val_set = val_set
+        self.gen = torch.Generator().manual_seed(cfg.seed)  # hypotheses
+        self.loader_gen = torch.Generator().manual_seed(cfg.seed + 1)  # data order
+        self.loader = DataLoader(train_set, batch_size=cfg.batch_size, shuffle=True,
+                                 drop_last=True, num_workers=cfg.num_workers,
+                                 generator=self.loader_gen)
+        self.opt = torch.optim.AdamW(net.parameters(), lr=cfg.lr, weight_decay=cfg.weight_decay)
+        self.step = 0
+        self.best = -math.inf
+
+    # -- schedule and losses ----------------------------------------------------------
+    def lr_at(self, step: int) -> float:
+        c = self.cfg
+        warm = min(1.0, (step + 1) / max(c.warmup_steps, 1))
+        progress = max(0.0, (step - c.warmup_steps) / max(c.steps - c.warmup_steps, 1))
+        cosine = c.final_lr_ratio + (1 - c.final_lr_ratio) * 0.5 * (1 + math.cos(math.pi * min(progress, 1.0)))
+        return c.lr * warm * cosine
+
+    def losses(self, batch: dict) -> dict[str, torch.Tensor]:
+        c, net = self.cfg, self.net
+        mc = net.config
+        b = batch["image_prev"].shape[0]
+        feats = net.extract(torch.cat((batch["image_prev"], batch["image_latest"])))
+        ctx = net.prepare_reference(feats[b:], batch["image_latest"])
+        mask = valid_mask(batch)
+        shifts = sample_shifts_px(b, c.shifts_per_pair, mc.max_shift_px, self.gen).to(self.device)
+        flow_logits = net.classify_shift(ctx, feats[:b], shifts)
+        out = {"flow": masked_bce(flow_logits, shift_labels(batch["flow_px"], shifts), mask[:, None, None])}
+        if c.stage == "flow":
+            out["loss"] = out["flow"]
+            return out
+        eta = batch["eta"]
+        if c.stage == "binary":
+            thr = sample_eta(b, c.thresholds_per_pair, c.train_tau_min_s, c.train_eta_max,
+                             mc.frame_dt_s, self.gen).to(self.device)
+            logits = net.classify_eta(ctx, feats[:b], thr)
+            out["ttc"] = masked_bce(logits, eta_labels(eta, thr), mask[:, None])
+        else:
+            cont = net.continuous(ctx, feats[:b])
+            levels = cont.levels.expand(b, -1)
+            bce = torch.nn.functional.binary_cross_entropy(
+                cont.prob_le.clamp(1e-6, 1 - 1e-6)[mask[:, None].expand_as(cont.prob_le)],
+                eta_labels(eta, levels)[mask[:, None].expand_as(cont.prob_le)])
+            target = torch.log(eta.clamp(mc.cont_eta_min, mc.cont_eta_max))[:, None]
+            unit = math.log(mc.cont_eta_max / mc.cont_eta_min) / mc.cont_levels  # ~ one bin
+            m = mask[:, None] & (eta[:, None] > 0)
+            sl1 = 0.5 * (masked_smooth_l1(torch.log(cont.eta_auc), target, m, unit)
+                         + masked_smooth_l1(cont.log_eta, target, m, unit))
+            out["cont"] = sl1
+            out["ttc"] = c.cont_bce_weight * bce + c.cont_sl1_weight * sl1
+        out["loss"] = c.ttc_weight * out["ttc"] + c.flow_weight * out["flow"]
+        return out
+
+    # -- checkpoints --------------------------------------------------------------------
+    def _meta(self, val: dict | None = None) -> dict:
+        meta = dict(self.meta, stage=self.cfg.stage, step=self.step,
+                    frame_dt_s=self.net.config.frame_dt_s, train_config=dataclasses.asdict(self.cfg))
+        if val:
+            meta.update(val)
+        return meta
+
+    def save_last(self) -> None:
+        state = {"optimizer": self.opt.state_dict(), "step": self.step, "best": self.best,
+                 "stage": self.cfg.stage, "gen": self.gen.get_state(),
+                 "loader_gen": self.loader_gen.get_state(), "torch_rng": torch.get_rng_state()}
+        save_checkpoint(self.paths.last, make_payload(self.net, self.config_name, self._meta(), state))
+
+    def resume(self) -> None:
+        ckpt = load_checkpoint(self.paths.last, map_location=self.device,
+                               expected_config=self.config_name)
+        state = ckpt.get("train_state")
+        if state is None:
+            raise ValueError(f"{self.paths.last} holds no training state")
+        self.net.load_state_dict(ckpt["state_dict"])
+        if state["stage"] != self.cfg.stage:
+            raise ValueError(f"{self.paths.last} is at stage {state['stage']!r}, not {self.cfg.stage!r}")
+        self.opt.load_state_dict(state["optimizer"])
+        self.step, self.best = int(state["step"]), float(state["best"])
+        self.gen.set_state(state["gen"])
+        self.loader_gen.set_state(state["loader_gen"])
+        torch.set_rng_state(state["torch_rng"])
+
+    # -- loop ---------------------------------------------------------------------------
+    def _log(self, row: dict) -> None:
+        new = not self.paths.csv.exists()
+        with open(self.paths.csv, "a", newline="") as f:
+            writer = csv.DictWriter(f, fieldnames=CSV_FIELDS)
+            if new:
+                writer.writeheader()
+            writer.writerow({k: row.get(k, "") for k in CSV_FIELDS})
+
+    def run(self) -> dict:
+        c = self.cfg
+        self.net.train()
+        batches = _forever(self.loader)
+        bar = tqdm(total=c.steps, initial=self.step, desc=f"train {c.stage}", mininterval=1.0)
+        last_val: dict = {}
+        t0 = time.perf_counter()
+        while self.step < c.steps:
+            batch = {k: v.to(self.device, non_blocking=True) for k, v in next(batches).items()}
+            lr = self.lr_at(self.step)
+            for group in self.opt.param_groups:
+                group["lr"] = lr
+            parts = self.losses(batch)
+            self.opt.zero_grad(set_to_none=True)
+            parts["loss"].backward()
+            grad_norm = float(torch.nn.utils.clip_grad_norm_(self.net.parameters(), c.clip_grad_norm))
+            self.opt.step()
+            self.step += 1
+            bar.update(1)
+            bar.set_postfix(loss=f"{parts['loss'].item():.4f}")
+            row = None
+            if self.step % c.log_every == 0 or self.step == c.steps:
+                dt = (time.perf_counter() - t0) / c.log_every
+                t0 = time.perf_counter()
+                row = {"step": self.step, "stage": c.stage, "lr": f"{lr:.3g}", "grad_norm": f"{grad_norm:.4g}",
+                       "s_per_step": f"{dt:.3f}", **{f"loss_{k}" if k != "loss" else k: f"{v.item():.5f}"
+                                                      for k, v in parts.items()}}
+            if self.step % c.val_every == 0 or self.step == c.steps:
+                last_val = validate(self.net, self.val_set, stage=c.stage, limit=c.val_limit,
+                                    batch_size=c.batch_size, device=self.device)
+                row = dict(row or {"step": self.step, "stage": c.stage}, **{k: f"{v:.5f}" for k, v in last_val.items()})
+                if last_val["val_miou"] > self.best:
+                    self.best = last_val["val_miou"]
+                    save_checkpoint(self.paths.best, make_payload(self.net, self.config_name,
+                                                                  self._meta(last_val)))
+                self.save_last()
+            if row is not None:
+                self._log(row)
+        bar.close()
+        return {"stage": c.stage, "steps": self.step, "best_val_miou": self.best, **last_val}

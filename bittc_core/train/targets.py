@@ -1,0 +1,44 @@
+"""Hypotheses and their labels for one batch.
+
+TTC: eta thresholds uniform in [tau_to_eta(train_tau_min_s), train_eta_max]; label
+1[0 < eta <= eta_i] (inside the geofence; thresholds above 1 label every approaching
+and static pixel inside and only faster-receding ones outside).
+Flow: shifts that are multiples of 3 px (one feature pixel) uniform in
+[-max_shift_px, max_shift_px] per axis; labels 1[u > u_i], 1[v > v_i].
+Masks: ``valid`` and finite ground truth only.
+"""
+
+from __future__ import annotations
+
+import torch
+
+from bittc_core.model.network import FEATURE_STRIDE
+from bittc_core.ttc import tau_to_eta
+
+
+def sample_eta(b: int, k: int, tau_min_s: float, eta_max: float, dt_s: float,
+               gen: torch.Generator) -> torch.Tensor:
+    lo = tau_to_eta(tau_min_s, dt_s)
+    return lo + (eta_max - lo) * torch.rand(b, k, generator=gen)
+
+
+def sample_shifts_px(b: int, k: int, max_shift_px: float, gen: torch.Generator) -> torch.Tensor:
+    n = int(max_shift_px // FEATURE_STRIDE)
+    return FEATURE_STRIDE * torch.randint(-n, n + 1, (b, k, 2), generator=gen).float()
+
+
+def eta_labels(eta: torch.Tensor, thresholds: torch.Tensor) -> torch.Tensor:
+    """eta (B, H, W), thresholds (B, K) -> float (B, K, H, W)."""
+    e = eta[:, None]
+    return ((e > 0) & (e <= thresholds[:, :, None, None])).float()
+
+
+def shift_labels(flow_px: torch.Tensor, shifts_px: torch.Tensor) -> torch.Tensor:
+    """flow (B, 2, H, W), shifts (B, K, 2) -> float (B, K, 2, H, W) of 1[flow > shift]."""
+    return (flow_px[:, None] > shifts_px[..., None, None]).float()
+
+
+def valid_mask(sample: dict) -> torch.Tensor:
+    """(B, H, W) bool: valid pixels with finite eta and flow."""
+    return (sample["valid"] & torch.isfinite(sample["eta"])
+            & torch.isfinite(sample["flow_px"]).all(dim=1))
