@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from sim import textures
+from sim.textures import VARIANTS
 
 if TYPE_CHECKING:  # pragma: no cover
     from sim.world import World
@@ -31,6 +31,7 @@ class RoadConfig:
     roadside_spacing_m: float = 25.0  # mean spacing of poles/trees/buildings per side
     barrier: bool = True
     buildings: bool = True
+    markings_max_x_m: float | None = None  # no dashed markings beyond this x [m] (None: whole road)
 
     def __post_init__(self) -> None:
         if self.lanes_left < 0 or self.lanes_right < 0 or self.lanes_left + self.lanes_right > 6:
@@ -59,13 +60,14 @@ def build_scenery(world: World, road: RoadConfig, rng: np.random.Generator) -> N
     x0, x1 = road.x_start_m, road.x_end_m
     yl, yr = road.y_left_edge_m, road.y_right_edge_m
     road_w = yl - yr
-    asphalt = [world.texture(textures.asphalt(rng)) for _ in range(3)]
-    grass = [world.texture(textures.tinted(rng, (0.3, 0.45, 0.2), 1.0)) for _ in range(2)]
-    concrete = world.texture(textures.tinted(rng, (0.7, 0.7, 0.68), 0.7))
+    v = int(rng.integers(VARIANTS))
+    asphalt = [world.texture("asphalt", v + i) for i in range(2)]
+    grass = [world.texture("grass", v)] * 2
+    concrete = world.texture("concrete", v)
     n_seg = int(np.ceil((x1 - x0) / road.segment_m))
     for i in range(n_seg):
         xc = x0 + (i + 0.5) * road.segment_m
-        world.add_static_box((xc, (yl + yr) / 2, -0.05), (road.segment_m / 2, road_w / 2, 0.05), asphalt[i % 3])
+        world.add_static_box((xc, (yl + yr) / 2, -0.05), (road.segment_m / 2, road_w / 2, 0.05), asphalt[i % 2])
         for side, edge in ((1, yl), (-1, yr)):  # verges, 30 m wide
             world.add_static_box((xc, edge + side * 15.0, -0.06), (road.segment_m / 2, 15.0, 0.05), grass[(i + side) % 2])
         if road.barrier:
@@ -79,18 +81,19 @@ def build_scenery(world: World, road: RoadConfig, rng: np.random.Generator) -> N
             world.add_static_box((xc, edge, 0.003), (road.segment_m / 2, 0.075, 0.003), None, white)
     for k in range(-road.lanes_right, road.lanes_left):
         y = (k + 0.5) * road.lane_width_m
-        for xd in np.arange(x0, x1, 12.0):
+        for xd in np.arange(x0, x1 if road.markings_max_x_m is None else min(x1, road.markings_max_x_m), 12.0):
             world.add_static_box((xd + 1.5, y, 0.003), (1.5, 0.075, 0.003), None, white)
     _roadside(world, road, rng)
 
 
 def _roadside(world: World, road: RoadConfig, rng: np.random.Generator) -> None:
     """Poles, signs, trees and buildings on both sides, at several lateral depths."""
-    metal = world.texture(textures.tinted(rng, (0.55, 0.55, 0.6), 0.3))
-    bark = world.texture(textures.tinted(rng, (0.35, 0.25, 0.15), 0.6))
-    leaves = [world.texture(textures.foliage(rng)) for _ in range(3)]
-    facades = [world.texture(textures.facade(rng)) for _ in range(5)]
-    sign = world.texture(textures.tinted(rng, (0.1, 0.35, 0.8), 0.4))
+    v = int(rng.integers(VARIANTS))
+    metal = world.texture("metal", v)
+    bark = world.texture("bark", v)
+    leaves = [world.texture("foliage", v + i) for i in range(2)]
+    facades = [world.texture("facade", v + i) for i in range(3)]
+    sign = world.texture("sign", v)
     for side, edge in ((1, road.y_left_edge_m), (-1, road.y_right_edge_m)):
         x = road.x_start_m + rng.uniform(0, road.roadside_spacing_m)
         while x < road.x_end_m:
@@ -107,9 +110,9 @@ def _roadside(world: World, road: RoadConfig, rng: np.random.Generator) -> None:
                 h = rng.uniform(2.0, 4.0)
                 world.add_static_box((x, y, h / 2), (0.2, 0.2, h / 2), bark)
                 r = rng.uniform(1.5, 3.0)
-                world.add_static_sphere((x, y, h + r * 0.8), r, leaves[int(rng.integers(3))])
+                world.add_static_sphere((x, y, h + r * 0.8), r, leaves[int(rng.integers(2))])
             elif road.buildings:
                 depth, width, height = rng.uniform(6, 20), rng.uniform(8, 25), rng.uniform(4, 20)
                 y = edge + side * (rng.uniform(12.0, 40.0) + depth / 2)
-                world.add_static_box((x, y, height / 2), (width / 2, depth / 2, height / 2), facades[int(rng.integers(5))])
+                world.add_static_box((x, y, height / 2), (width / 2, depth / 2, height / 2), facades[int(rng.integers(3))])
             x += rng.uniform(0.5, 1.5) * road.roadside_spacing_m

@@ -7,6 +7,9 @@ noise that differs between frames. The textures here are therefore smooth noise
 
 from __future__ import annotations
 
+import os
+from pathlib import Path
+
 import cv2
 import numpy as np
 
@@ -81,3 +84,62 @@ def sky_gradient(height_px: int, width_px: int, horizon_row: float) -> np.ndarra
     bottom = np.array([200, 220, 235], np.float32)
     col = bottom[None, :] * (1 - t) + top[None, :] * t
     return np.broadcast_to(col[:, None, :], (height_px, width_px, 3)).astype(np.uint8)
+
+
+# --------------------------------------------------------------------------- bank
+TEXTURE_KINDS = ("asphalt", "grass", "concrete", "metal", "bark", "foliage", "facade", "sign", "glass", "tyre", "paint")
+VARIANTS = 6  # variants per kind (per palette colour for paint)
+
+
+class TextureBank:
+    """Procedural textures written once as PNG files, picked by (kind, variant).
+
+    A bank is a pure function of its seed, so any process that builds the bank with
+    the same seed renders the same pixels. Worlds load from it instead of drawing
+    fresh textures, which keeps building a world cheap when many are built in a row.
+    """
+
+    def __init__(self, seed: int, directory: Path):
+        self.seed = seed
+        self.dir = Path(directory)
+        self.dir.mkdir(parents=True, exist_ok=True)
+
+    def path(self, kind: str, variant: int, palette_index: int = 0) -> Path:
+        if kind not in TEXTURE_KINDS:
+            raise ValueError(f"unknown texture kind {kind!r}")
+        variant %= VARIANTS
+        p = self.dir / f"{kind}_{palette_index}_{variant}.png"
+        if not p.exists():
+            rng = np.random.default_rng([self.seed, TEXTURE_KINDS.index(kind), palette_index, variant])
+            img = _draw(kind, rng, palette_index)
+            tmp = p.with_name(f".{p.name}.{os.getpid()}.tmp.png")
+            cv2.imwrite(str(tmp), cv2.cvtColor(img, cv2.COLOR_RGB2BGR))
+            os.replace(tmp, p)
+        return p
+
+
+def _draw(kind: str, rng: np.random.Generator, palette_index: int) -> np.ndarray:
+    from sim.vehicles import PALETTE
+
+    if kind == "asphalt":
+        return asphalt(rng)
+    if kind == "grass":
+        return tinted(rng, (0.3, 0.45, 0.2), 1.0)
+    if kind == "concrete":
+        return tinted(rng, (0.7, 0.7, 0.68), 0.7)
+    if kind == "metal":
+        return tinted(rng, (0.55, 0.55, 0.6), 0.3)
+    if kind == "bark":
+        return tinted(rng, (0.35, 0.25, 0.15), 0.6)
+    if kind == "foliage":
+        return foliage(rng)
+    if kind == "facade":
+        return facade(rng)
+    if kind == "sign":
+        return tinted(rng, tuple(rng.choice([(0.1, 0.35, 0.8), (0.1, 0.5, 0.2), (0.85, 0.75, 0.1)])), 0.4)
+    if kind == "glass":
+        base = np.asarray(PALETTE[palette_index]) * 0.3 + 0.15
+        return tinted(rng, tuple(base), 0.5)
+    if kind == "tyre":
+        return tinted(rng, (0.08, 0.08, 0.08), 0.5)
+    return vehicle_paint(rng, PALETTE[palette_index])

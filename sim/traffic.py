@@ -78,12 +78,15 @@ class ScriptedVehicle(_Sized, Vehicle):
     Longitudinal: constant speed, then from ``brake_onset_s`` a constant
     ``accel_mps2`` (negative brakes); it stops at standstill instead of reversing.
     Lateral: tracks ``y_target_m(t)`` (world frame) with a steering law on the
-    bicycle model; a lane change follows a smooth cosine profile.
+    bicycle model; a lane change follows a smooth cosine profile. With
+    ``keep_lateral=False`` it drives straight along its initial heading (crossing
+    traffic, drifting vehicles).
     """
 
     def __init__(self, road: Road, x_m: float, y_m: float, heading_rad: float, speed_mps: float, length_m: float, width_m: float,
                  accel_mps2: float = 0.0, brake_onset_s: float = 0.0,
-                 lane_change: tuple[float, float, float] | None = None, max_speed_mps: float = MAX_SPEED_MPS):  # fmt: skip
+                 lane_change: tuple[float, float, float] | None = None, max_speed_mps: float = MAX_SPEED_MPS,
+                 keep_lateral: bool = True):  # fmt: skip
         super().__init__(road, np.array([x_m, -y_m], float), -heading_rad, speed_mps)
         self.set_size(length_m, width_m)
         self.accel_mps2 = accel_mps2
@@ -91,6 +94,7 @@ class ScriptedVehicle(_Sized, Vehicle):
         self.y0_m = y_m
         self.lane_change = lane_change  # (start [s], duration [s], target y [m])
         self.max_speed_mps = max_speed_mps
+        self.keep_lateral = keep_lateral  # False: drive straight along the initial heading
         self.current_accel_mps2 = 0.0
 
     def y_target_m(self, t_s: float) -> tuple[float, float]:
@@ -114,7 +118,8 @@ class ScriptedVehicle(_Sized, Vehicle):
         if self.speed + a * dt_s > self.max_speed_mps:
             a = (self.max_speed_mps - self.speed) / dt_s
         self.current_accel_mps2 = a
-        self.action = {"acceleration": a, "steering": _lateral_steering(self, *self.y_target_m(t_s))}
+        steering = _lateral_steering(self, *self.y_target_m(t_s)) if self.keep_lateral else 0.0
+        self.action = {"acceleration": a, "steering": steering}
 
 
 class EgoVehicle(_Sized, Vehicle):

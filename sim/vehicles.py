@@ -38,11 +38,17 @@ class VehicleSpec:
     length_m: float
     width_m: float
     height_m: float
-    color_rgb: tuple[float, float, float]
+    palette_index: int = 0  # body colour: PALETTE[palette_index]
+
+    @property
+    def color_rgb(self) -> tuple[float, float, float]:
+        return PALETTE[self.palette_index]
 
     def __post_init__(self) -> None:
         if self.kind not in VEHICLE_CLASSES and self.kind != "ego":
             raise ValueError(f"unknown vehicle kind {self.kind!r}; known: {sorted(VEHICLE_CLASSES)}")
+        if not 0 <= self.palette_index < len(PALETTE):
+            raise ValueError(f"VehicleSpec.palette_index = {self.palette_index} outside [0, {len(PALETTE) - 1}]")
         for name in ("length_m", "width_m", "height_m"):
             if not getattr(self, name) > 0:
                 raise ValueError(f"VehicleSpec.{name} must be > 0, got {getattr(self, name)}")
@@ -53,10 +59,8 @@ def sample_spec(rng: np.random.Generator, kind: str) -> VehicleSpec:
     if kind not in VEHICLE_CLASSES:
         raise ValueError(f"unknown vehicle kind {kind!r}; known: {sorted(VEHICLE_CLASSES)}")
     (l0, l1), (w0, w1), (h0, h1) = VEHICLE_CLASSES[kind]
-    color = PALETTE[int(rng.integers(len(PALETTE)))]
-    jitter = rng.uniform(-0.05, 0.05, 3)
-    color = tuple(float(np.clip(c + j, 0, 1)) for c, j in zip(color, jitter))
-    return VehicleSpec(kind, float(rng.uniform(l0, l1)), float(rng.uniform(w0, w1)), float(rng.uniform(h0, h1)), color)
+    palette_index = int(rng.integers(len(PALETTE)))
+    return VehicleSpec(kind, float(rng.uniform(l0, l1)), float(rng.uniform(w0, w1)), float(rng.uniform(h0, h1)), palette_index)
 
 
 @dataclass(frozen=True)

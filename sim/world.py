@@ -16,7 +16,6 @@ import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
-import cv2
 import numpy as np
 import pybullet as p
 from pybullet_utils import bullet_client
@@ -53,14 +52,17 @@ class World:
         seed: draws the scenery, textures and lighting.
         light_direction: direction *towards* the light in the world frame; drawn from
             ``seed`` when None.
+        bank: procedural textures to use; a private bank seeded with ``seed`` when None.
     """
 
-    def __init__(self, camera: CameraConfig, road: RoadConfig, seed: int, light_direction: tuple[float, float, float] | None = None):
+    def __init__(self, camera: CameraConfig, road: RoadConfig, seed: int, light_direction: tuple[float, float, float] | None = None,
+                 bank: textures.TextureBank | None = None):  # fmt: skip
         self.camera = camera
         self.road = road
         self.rng = np.random.default_rng(seed)
         self._tmp = Path(tempfile.mkdtemp(prefix="bittc_world_"))
-        self._n_textures = 0
+        self.bank = bank if bank is not None else textures.TextureBank(seed, self._tmp)
+        self._texture_ids: dict[tuple[str, int, int], int] = {}
         self._client: bullet_client.BulletClient | None = bullet_client.BulletClient(connection_mode=p.DIRECT)
         self._instance_of_uid: list[int] = []  # PyBullet body uid -> instance id
         self._vehicle_uid: dict[int, int] = {}  # instance id -> body uid
@@ -100,12 +102,12 @@ class World:
             pass
 
     # ------------------------------------------------------------------ building
-    def texture(self, image_rgb: np.ndarray) -> int:
-        """Load an (h, w, 3) uint8 RGB image as a texture; returns its id."""
-        path = self._tmp / f"tex{self._n_textures:05d}.png"
-        self._n_textures += 1
-        cv2.imwrite(str(path), cv2.cvtColor(image_rgb, cv2.COLOR_RGB2BGR))
-        return self.client.loadTexture(str(path))
+    def texture(self, kind: str, variant: int, palette_index: int = 0) -> int:
+        """PyBullet texture id of a bank texture (loaded once per world)."""
+        key = (kind, int(variant) % textures.VARIANTS, int(palette_index))
+        if key not in self._texture_ids:
+            self._texture_ids[key] = self.client.loadTexture(str(self.bank.path(kind, key[1], key[2])))
+        return self._texture_ids[key]
 
     def _register(self, uid: int, instance: int) -> None:
         while len(self._instance_of_uid) <= uid:
@@ -131,10 +133,12 @@ class World:
     def add_vehicle(self, spec: VehicleSpec) -> int:
         """Add a multi-part vehicle body (hidden below ground until posed); returns its instance id."""
         c = self.client
-        paint = self.texture(textures.vehicle_paint(self.rng, spec.color_rgb))
-        glass = self.texture(textures.tinted(self.rng, tuple(0.3 * np.asarray(spec.color_rgb) + 0.15), 0.4))
-        tyre = self.texture(textures.tinted(self.rng, (0.08, 0.08, 0.08), 0.5))
-        tex = {"paint": paint, "glass": glass, "tyre": tyre}
+        variant = int(self.rng.integers(textures.VARIANTS))
+        tex = {
+            "paint": self.texture("paint", variant, spec.palette_index),
+            "glass": self.texture("glass", variant, spec.palette_index),
+            "tyre": None,  # plain dark rubber: one texture load less per vehicle
+        }
         shapes, positions, orientations, tex_ids = [], [], [], []
         wheel_q = c.getQuaternionFromEuler([math.pi / 2, 0, 0])
         for part in parts(spec):
@@ -142,7 +146,8 @@ class World:
                 shapes.append(c.createVisualShape(p.GEOM_BOX, halfExtents=list(part.half_extents_m)))
                 orientations.append([0, 0, 0, 1])
             else:
-                shapes.append(c.createVisualShape(p.GEOM_CYLINDER, radius=part.half_extents_m[0], length=2 * part.half_extents_m[1]))
+                shapes.append(c.createVisualShape(p.GEOM_CYLINDER, radius=part.half_extents_m[0], length=2 * part.half_extents_m[1],
+                                                  rgbaColor=[0.08, 0.08, 0.08, 1.0]))  # fmt: skip
                 orientations.append(list(wheel_q))
             positions.append(list(part.center_m))
             tex_ids.append(tex[part.texture])
@@ -158,7 +163,8 @@ class World:
             linkParentIndices=[0] * n, linkJointTypes=[p.JOINT_FIXED] * n, linkJointAxis=[[0, 0, 1]] * n,
         )  # fmt: skip
         for link, t in enumerate(tex_ids):
-            c.changeVisualShape(uid, link - 1, textureUniqueId=t)
+            if t is not None:
+                c.changeVisualShape(uid, link - 1, textureUniqueId=t)
         instance = len(self._vehicle_uid) + 1
         self._vehicle_uid[instance] = uid
         self._vehicle_base_z[instance] = float(base_pos[2])

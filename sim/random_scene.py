@@ -1,0 +1,173 @@
+"""Randomised scenes for training data: a road, an ego, 0-12 actors, a short clip.
+
+Everything is drawn from one numpy Generator seeded by the sample's seed, so a
+(dataset seed, sample seed) pair fixes every byte of the clip, whichever process
+renders it. Ground truth follows :mod:`sim.ground_truth` (maps in the latest frame's
+grid, tau from the latest frame's capture time).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, replace
+
+import numpy as np
+
+from sim.camera import CameraConfig, cam_T_ego
+from sim.ground_truth import GroundTruth, compute_ground_truth, planar_pose
+from sim.scenery import RoadConfig
+from sim.textures import TextureBank
+from sim.traffic import ActuatorConfig, EgoVehicle, ScriptedVehicle, build_road
+from sim.vehicles import EGO_SIZE_M, footprint_corners, footprints_overlap, sample_spec
+from sim.world import World
+
+MOTIONS = ("approaching", "receding", "oncoming", "crossing", "lateral", "stationary", "braking")
+CLASSES = ("car", "car", "car", "gvt", "van", "truck")
+MAX_ACTORS = 12
+EGO_MAX_SPEED_MPS = 130 / 3.6  # [m/s]
+SIM_DT_S = 0.01  # [s]
+
+
+@dataclass
+class Clip:
+    """K frames and the ground truth of each consecutive pair.
+
+    images: K arrays (H, W, 3) uint8, oldest first. gts[j] compares frame j+1 (latest)
+    with frame j (previous). meta: JSON-serialisable description (intrinsics, dt,
+    camera, ego and actor states per frame, scene parameters).
+    """
+
+    images: list[np.ndarray]
+    gts: list[GroundTruth]
+    meta: dict
+
+
+def random_camera(rng: np.random.Generator, base: CameraConfig) -> CameraConfig:
+    """Jitter the mounting: height, pitch, vertical FOV and per-frame rotation noise."""
+    return replace(
+        base,
+        mount_height_m=float(rng.uniform(1.1, 1.8)),
+        pitch_deg=float(rng.uniform(-1.0, 5.0)),
+        vfov_deg=float(rng.uniform(24.0, 40.0)),
+        jitter_deg=float(rng.uniform(0.0, 0.4)),
+    )
+
+
+def random_road(rng: np.random.Generator) -> RoadConfig:
+    return RoadConfig(
+        lanes_left=int(rng.integers(0, 4)),
+        lanes_right=int(rng.integers(0, 3)),
+        lane_width_m=float(rng.uniform(3.0, 3.8)),
+        x_start_m=-20.0,
+        x_end_m=160.0,
+        markings_max_x_m=90.0,
+        roadside_spacing_m=float(rng.uniform(12.0, 35.0)),
+        barrier=bool(rng.random() < 0.6),
+        buildings=bool(rng.random() < 0.8),
+    )
+
+
+def _actor_motion(rng: np.random.Generator, motion: str, road: RoadConfig, v_ego: float):
+    """(x, y, heading, speed, accel, keep_lateral) for one actor."""
+    lanes = list(range(-road.lanes_right, road.lanes_left + 1))
+    lane_y = road.lane_center_y_m(int(rng.choice(lanes))) + float(rng.uniform(-0.4, 0.4))
+    x = float(rng.uniform(6.0, 90.0))
+    heading, accel, keep = 0.0, 0.0, True
+    if motion == "approaching":
+        speed = max(0.0, v_ego - float(rng.uniform(1.0, 20.0)))
+    elif motion == "receding":
+        speed = v_ego + float(rng.uniform(1.0, 15.0))
+    elif motion == "oncoming":
+        heading, speed = math.pi, float(rng.uniform(3.0, 30.0))
+    elif motion == "crossing":
+        side = float(rng.choice([-1.0, 1.0]))
+        heading = side * math.pi / 2 + float(rng.normal(0.0, 0.15))
+        lane_y = -side * float(rng.uniform(0.0, road.y_left_edge_m + 8.0))
+        x, speed, keep = float(rng.uniform(8.0, 60.0)), float(rng.uniform(1.0, 12.0)), False
+    elif motion == "lateral":
+        heading = float(rng.choice([-1.0, 1.0]) * rng.uniform(0.05, 0.3))
+        speed, keep = max(0.0, v_ego + float(rng.uniform(-8.0, 8.0))), False
+    elif motion == "stationary":
+        speed = 0.0
+    else:  # braking
+        speed, accel = max(0.0, v_ego + float(rng.uniform(-5.0, 5.0))), -float(rng.uniform(2.0, 8.0))
+    return x, lane_y, heading, speed, accel, keep
+
+
+def render_clip(sample_seed: int, base_camera: CameraConfig, clip_length: int, bank: TextureBank) -> Clip:
+    """Draw a scene from ``sample_seed`` and render ``clip_length`` frames of it."""
+    rng = np.random.default_rng(sample_seed)
+    camera = random_camera(rng, base_camera)
+    road = random_road(rng)
+    v_ego = 0.0 if rng.random() < 0.08 else float(rng.uniform(0.0, EGO_MAX_SPEED_MPS))
+    ego_decel = float(rng.uniform(2.0, 7.0)) if rng.random() < 0.15 else 0.0
+    hw_road = build_road(road, seed=sample_seed % (2**31))
+    n_sub = max(1, int(round(camera.dt_s / SIM_DT_S)))
+    sim_dt = camera.dt_s / n_sub
+    ego = EgoVehicle(hw_road, 0.0, 0.0, v_ego, EGO_SIZE_M[0], EGO_SIZE_M[1], ActuatorConfig(delay_s=0.0), sim_dt)
+    hw_road.vehicles.append(ego)
+    world = World(camera, road, seed=int(rng.integers(2**31)), bank=bank)
+    try:
+        actors = []
+        taken = [footprint_corners(0.0, 0.0, 0.0, EGO_SIZE_M[0] + 2.0, EGO_SIZE_M[1] + 1.0)]
+        for _ in range(int(rng.integers(0, MAX_ACTORS + 1))):
+            motion = str(rng.choice(MOTIONS))
+            spec = sample_spec(rng, str(rng.choice(CLASSES)))
+            for _attempt in range(5):
+                x, y, heading, speed, accel, keep = _actor_motion(rng, motion, road, v_ego)
+                corners = footprint_corners(x, y, heading, spec.length_m + 1.0, spec.width_m + 0.5)
+                if not any(footprints_overlap(corners, t) for t in taken):
+                    break
+            else:
+                continue
+            taken.append(corners)
+            veh = ScriptedVehicle(hw_road, x, y, heading, speed, spec.length_m, spec.width_m, accel_mps2=accel, keep_lateral=keep)
+            hw_road.vehicles.append(veh)
+            actors.append((world.add_vehicle(spec), spec, veh, motion))
+        images, frames, states = [], [], []
+        t = 0.0
+        for k in range(clip_length):
+            if k > 0:
+                for _ in range(n_sub):
+                    ego.command(ego_decel, sim_dt)
+                    for _, _, veh, _ in actors:
+                        veh.command(t, sim_dt)
+                    for v in hw_road.vehicles:
+                        v.step(sim_dt)
+                    t += sim_dt
+            poses = {inst: veh.world_pose() for inst, _, veh, _ in actors}
+            for inst, pose in poses.items():
+                world.set_vehicle_pose(inst, *pose)
+            jitter = tuple(rng.normal(0.0, camera.jitter_deg, 3)) if camera.jitter_deg > 0 else (0.0, 0.0, 0.0)
+            ex, ey, eh = ego.world_pose()
+            cam_T_world = cam_T_ego(camera, jitter) @ np.linalg.inv(planar_pose(ex, ey, eh))
+            r = world.render(cam_T_world)
+            images.append(r.rgb)
+            frames.append((r, cam_T_world, poses))
+            states.append({
+                "t_s": round(t, 6),
+                "ego": {"x_m": ex, "y_m": ey, "heading_rad": eh, "speed_mps": float(ego.speed)},
+                "actors": [{"instance": inst, "x_m": poses[inst][0], "y_m": poses[inst][1], "heading_rad": poses[inst][2],
+                            "speed_mps": float(veh.speed)} for inst, _, veh, _ in actors],
+            })  # fmt: skip
+        gts = []
+        for j in range(1, clip_length):
+            (r0, c0, p0), (r1, c1, p1) = frames[j - 1], frames[j]
+            motions = {i: planar_pose(*p0[i]) @ np.linalg.inv(planar_pose(*p1[i])) for i in p1}
+            gts.append(compute_ground_truth(r1.depth_m, r1.instance, camera.K(), c1, c0, motions, camera.dt_s, camera.far_m))
+    finally:
+        world.close()
+    fx, fy, cx, cy = camera.intrinsics()
+    meta = {
+        "sample_seed": int(sample_seed),
+        "intrinsics": {"fx_px": fx, "fy_px": fy, "cx_px": cx, "cy_px": cy},
+        "dt_s": camera.dt_s,
+        "camera": asdict(camera),
+        "road": asdict(road),
+        "ego_decel_mps2": ego_decel,
+        "actors": [{"instance": inst, "kind": spec.kind, "length_m": spec.length_m, "width_m": spec.width_m,
+                    "height_m": spec.height_m, "palette_index": spec.palette_index, "motion": motion}
+                   for inst, spec, _, motion in actors],
+        "frames": states,
+    }  # fmt: skip
+    return Clip(images, gts, meta)
