@@ -146,6 +146,7 @@ def render_clip(sample_seed: int, base_camera: CameraConfig, clip_length: int, b
             frames.append((r, cam_T_world, poses))
             states.append({
                 "t_s": round(t, 6),
+                "cam_T_world": np.round(cam_T_world, 12).tolist(),
                 "ego": {"x_m": ex, "y_m": ey, "heading_rad": eh, "speed_mps": float(ego.speed)},
                 "actors": [{"instance": inst, "x_m": poses[inst][0], "y_m": poses[inst][1], "heading_rad": poses[inst][2],
                             "speed_mps": float(veh.speed)} for inst, _, veh, _ in actors],

@@ -17,8 +17,12 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-import pybullet as p
-from pybullet_utils import bullet_client
+
+from sim.quiet import c_output_suppressed
+
+with c_output_suppressed():
+    import pybullet as p
+    from pybullet_utils import bullet_client
 
 from sim import textures
 from sim.camera import CameraConfig, view_matrix_gl
@@ -63,7 +67,8 @@ class World:
         self._tmp = Path(tempfile.mkdtemp(prefix="bittc_world_"))
         self.bank = bank if bank is not None else textures.TextureBank(seed, self._tmp)
         self._texture_ids: dict[tuple[str, int, int], int] = {}
-        self._client: bullet_client.BulletClient | None = bullet_client.BulletClient(connection_mode=p.DIRECT)
+        with c_output_suppressed():
+            self._client: bullet_client.BulletClient | None = bullet_client.BulletClient(connection_mode=p.DIRECT)
         self._instance_of_uid: list[int] = []  # PyBullet body uid -> instance id
         self._vehicle_uid: dict[int, int] = {}  # instance id -> body uid
         self._vehicle_pose: dict[int, tuple[float, float, float]] = {}

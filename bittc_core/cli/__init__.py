@@ -19,6 +19,11 @@ COMMANDS: dict[str, str] = {
     "run": "bittc_core.cli.run_cmd",
     "scenarios": "bittc_core.cli.scenarios_cmd",
     "suite": "bittc_core.cli.suite_cmd",
+    "generate": "bittc_core.cli.generate_cmd",
+    "data": "bittc_core.cli.data_cmd",
+    "train": "bittc_core.cli.train_cmd",
+    "eval": "bittc_core.cli.eval_cmd",
+    "bench": "bittc_core.cli.bench_cmd",
 }
 
 

@@ -1,0 +1,59 @@
+"""Data-generation throughput, measured in one run: 1 worker, 2 workers, Ray vs local.
+
+Usage: python bench/bench_generate.py [--samples N] [--size HxW]
+Prints samples/s per worker at the given size (target >= 20 per core at 96x288), the
+2-worker / 1-worker ratio (target >= 1.7 on 2 cores) and Ray / local with the same
+worker count (target: Ray within 15 %). Start-up (process spawn, texture bank) is
+excluded: each configuration first makes a few warm-up samples in the same folder,
+then the timed samples. Nothing is asserted.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import tempfile
+import time
+from pathlib import Path
+
+os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
+
+from bittc_core.data.generate import GenerationConfig, generate  # noqa: E402
+
+
+def timed(cfg: GenerationConfig, n: int, workers: int, backend: str) -> float:
+    """Samples/s of ``n`` samples after ``2 * workers`` warm-up samples in the same run."""
+    with tempfile.TemporaryDirectory() as d:
+        warm = 2 * workers
+        generate(Path(d), cfg, "train", warm, workers, backend, progress=False)
+        t0 = time.perf_counter()
+        generate(Path(d), cfg, "train", warm + n, workers, backend, progress=False)
+        return n / (time.perf_counter() - t0)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--samples", type=int, default=80)
+    ap.add_argument("--size", default="96x288")
+    ap.add_argument("--no-ray", action="store_true")
+    args = ap.parse_args()
+    h, w = (int(v) for v in args.size.split("x"))
+    cfg = GenerationConfig(seed=123, height_px=h, width_px=w)
+    print(f"{os.cpu_count()} cores, {h}x{w}, {args.samples} timed samples per configuration (spawn + warm-up excluded)")
+    one = timed(cfg, args.samples, 1, "local")
+    print(f"local, 1 worker : {one:6.2f} samples/s  ({one:.2f} per worker; target >= 20 per core)")
+    two = timed(cfg, args.samples, 2, "local")
+    print(f"local, 2 workers: {two:6.2f} samples/s  ({two / 2:.2f} per worker)")
+    print(f"2-worker / 1-worker ratio: {two / one:.2f}  (target >= 1.7)")
+    if not args.no_ray:
+        try:
+            import ray  # noqa: F401
+        except ImportError:
+            print("ray: not installed (pip install 'bittc-sim[ray]'); skipped")
+            return
+        r = timed(cfg, args.samples, 2, "ray")
+        print(f"ray, 2 workers  : {r:6.2f} samples/s; ray / local = {r / two:.2f}  (target >= 0.85)")
+
+
+if __name__ == "__main__":
+    main()

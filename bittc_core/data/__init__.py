@@ -1,0 +1,1 @@
+"""Datasets: the on-disk format, generation, statistics, and PyTorch loaders."""
