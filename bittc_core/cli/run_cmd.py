@@ -23,20 +23,36 @@ def add_parser(sub) -> argparse.ArgumentParser:
     p.add_argument("--out", required=True, help="output directory")
     p.add_argument("--seed", type=int, default=0, help="scenery/appearance/traffic seed (default 0)")
     p.add_argument("--video", action="store_true", help="also write camera.mp4 with the exact TTC overlay and a HUD")
+    add_camera_flags(p)
+    return p
+
+
+def add_camera_flags(p: argparse.ArgumentParser) -> None:
     p.add_argument("--size", default=None, help="camera HxW in px (default 96x288)")
     p.add_argument("--fps", type=float, default=None, help="camera frame rate [Hz] (default 10)")
-    return p
+    p.add_argument("--vfov", type=float, default=None, help="vertical field of view [deg] (default 30)")
+    p.add_argument("--pitch", type=float, default=None, help="camera pitch, positive looks down [deg] (default 2)")
+    p.add_argument("--camera-height", type=float, default=None, help="camera height above ground [m] (default 1.3)")
+    p.add_argument("--jitter-deg", type=float, default=None, help="std of per-frame pitch/yaw/roll jitter [deg] (default 0)")
+    p.add_argument("--supersample", type=int, default=None, help="anti-aliasing factor 1-4 (default 1)")
 
 
 def camera_from_args(args) -> CameraConfig:
     kw = {}
+    for flag, field in (("vfov", "vfov_deg"), ("pitch", "pitch_deg"), ("camera_height", "mount_height_m"),
+                        ("jitter_deg", "jitter_deg"), ("supersample", "supersample")):  # fmt: skip
+        if getattr(args, flag) is not None:
+            kw[field] = getattr(args, flag)
     if args.size is not None:
         kw["height_px"], kw["width_px"] = parse_size(args.size)
     if args.fps is not None:
         if not 1.0 <= args.fps <= 100.0:
             raise CliError(f"--fps {args.fps}: must be in [1, 100] Hz")
         kw["fps_hz"] = args.fps
-    return CameraConfig(**kw)
+    try:
+        return CameraConfig(**kw)
+    except ValueError as e:
+        raise CliError(str(e)) from None
 
 
 def run(args) -> int:

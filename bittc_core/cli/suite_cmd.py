@@ -7,7 +7,7 @@ import argparse
 import controllers
 import scenarios
 from bittc_core.cli.common import non_negative_int, writable_dir
-from bittc_core.cli.run_cmd import camera_from_args
+from bittc_core.cli.run_cmd import add_camera_flags, camera_from_args
 
 
 def add_parser(sub) -> argparse.ArgumentParser:
@@ -19,8 +19,7 @@ def add_parser(sub) -> argparse.ArgumentParser:
     p.add_argument("--scenarios", default=None, help="comma-separated names/families (default: all bundled)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--video", action="store_true")
-    p.add_argument("--size", default=None, help="camera HxW in px (default 96x288)")
-    p.add_argument("--fps", type=float, default=None, help="camera frame rate [Hz] (default 10)")
+    add_camera_flags(p)
     return p
 
 
