@@ -20,6 +20,9 @@ from bittc_core.errors import CliError
 from bittc_core.ttc import eta_to_tau, tau_to_eta
 
 
+RANGE_RTOL = 1e-6  # thresholds computed in float round-trips may graze the range ends
+
+
 class EstimatorInputError(CliError, ValueError):
     """An image or threshold list the estimator cannot use; the message names it."""
 
@@ -35,11 +38,12 @@ def as_image_tensor(image, name: str) -> torch.Tensor:
     if isinstance(image, torch.Tensor):
         if not image.is_floating_point():
             raise EstimatorInputError(f"{name}: tensors must be float in [0, 1], got dtype {image.dtype}")
+        shape = tuple(image.shape)
         if image.ndim == 3:
             image = image[None]
         if image.ndim != 4 or image.shape[0] != 1 or image.shape[1] != 3:
             raise EstimatorInputError(f"{name}: expected a (3, H, W) or (1, 3, H, W) tensor, "
-                                      f"got shape {tuple(image.shape)}")
+                                      f"got shape {shape}")
         image = image.detach().to("cpu", torch.float32)
         if not torch.isfinite(image).all():
             raise EstimatorInputError(f"{name}: contains NaN or inf")
@@ -76,7 +80,7 @@ def as_thresholds(thresholds_s, tau_range_s: tuple[float, float], *, sorted_: bo
         if not np.isfinite(t) or t <= 0.0:
             raise EstimatorInputError(f"threshold {t!r} s: thresholds must be finite and > 0")
         lo, hi = tau_range_s
-        if not lo <= t <= hi:
+        if not lo * (1 - RANGE_RTOL) <= t <= hi * (1 + RANGE_RTOL):
             raise EstimatorInputError(f"threshold {t:g} s outside the trained range [{lo:g}, {hi:g}] s")
     if sorted_:
         bad = np.nonzero(np.diff(thr) <= 0)[0]

@@ -72,6 +72,7 @@ class FlowEstimator(Estimator):
         super().__init__(dt_s=config.dt_s, tau_range_s=(config.tau_min_s, config.tau_max_s))
         self.config = config
         self._dis = cv2.DISOpticalFlow_create(DIS_PRESETS[config.preset])
+        self._last: tuple[torch.Tensor, torch.Tensor, np.ndarray] | None = None  # pair -> eta
 
     def flow(self, prev: torch.Tensor, latest: torch.Tensor) -> np.ndarray:
         """(H, W, 2) float32 flow (u, v) [px], previous -> latest, in the latest grid."""
@@ -79,7 +80,12 @@ class FlowEstimator(Estimator):
         return -f
 
     def _motion_in_depth(self, prev: torch.Tensor, latest: torch.Tensor) -> np.ndarray:
-        return affine_eta(self.flow(prev, latest), self.config.window_px)
+        """eta map; the last pair's result is reused when the same pixels come again."""
+        if self._last is not None and torch.equal(self._last[0], prev) and torch.equal(self._last[1], latest):
+            return self._last[2].copy()
+        eta = affine_eta(self.flow(prev, latest), self.config.window_px)
+        self._last = (prev.clone(), latest.clone(), eta)
+        return eta.copy()
 
     def _geofence(self, prev: torch.Tensor, latest: torch.Tensor, eta: np.ndarray) -> np.ndarray:
         eta_map = self._motion_in_depth(prev, latest)

@@ -1,0 +1,107 @@
+"""`bittc eval --data DIR --method {bittc,flow,oracle}`: metrics of an estimator.
+
+Prints a table and writes a JSON file (--out, default eval_<method>_<split>.json)
+with miou, mid, error_rate, actor_iou, latency_ms (see ``bittc_core.metrics``).
+Latency: wall time per pair of the estimator calls (geofence for all metric
+thresholds + continuous), frames fed in dataset order.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import tempfile
+import time
+from pathlib import Path
+
+from bittc_core.errors import CliError
+
+METHODS = ("bittc", "flow", "oracle")
+SPLITS = ("train", "val", "test")
+
+
+def add_parser(sub) -> argparse.ArgumentParser:
+    p = sub.add_parser("eval", help="evaluate an estimator on a dataset split",
+                       description=__doc__.split("\n\n", 1)[1])
+    p.add_argument("--data", required=True, help="dataset folder, or 'synthetic'")
+    p.add_argument("--method", required=True, help="bittc, flow or oracle")
+    p.add_argument("--weights", default=None, help="checkpoint for bittc (default: shipped weights)")
+    p.add_argument("--out", default=None, help="JSON file to write")
+    p.add_argument("--split", default="test", help="train, val or test (default test)")
+    p.add_argument("--limit", type=int, default=None, help="evaluate the first N pairs only")
+    p.add_argument("--device", default="auto", help="auto, cpu or cuda")
+    return p
+
+
+def _check(args) -> Path:
+    if args.method not in METHODS:
+        raise CliError(f"--method {args.method!r}: expected one of {METHODS}")
+    if args.split not in SPLITS:
+        raise CliError(f"--split {args.split!r}: expected one of {SPLITS}")
+    if args.limit is not None and args.limit <= 0:
+        raise CliError(f"--limit {args.limit}: must be > 0")
+    if args.weights is not None and args.method != "bittc":
+        raise CliError(f"--weights applies to --method bittc only, not {args.method!r}")
+    if args.device not in ("auto", "cpu", "cuda"):
+        raise CliError(f"--device {args.device!r}: expected auto, cpu or cuda")
+    out = Path(args.out or f"eval_{args.method}_{args.split}.json")
+    if out.suffix != ".json":
+        raise CliError(f"--out {str(out)!r}: expected a .json file")
+    if not out.parent.exists():
+        raise CliError(f"--out {str(out)!r}: folder {str(out.parent)!r} does not exist")
+    return out
+
+
+def evaluate(estimator, dataset, limit: int | None) -> dict:
+    import numpy as np
+
+    from bittc_core.estimator import OracleEstimator
+    from bittc_core.metrics import MetricAccumulator
+
+    acc = MetricAccumulator(dt_s=estimator.dt_s)
+    n = len(dataset) if limit is None else min(limit, len(dataset))
+    for i in range(n):
+        s = dataset[i]
+        dt = float(s["dt_s"])
+        if abs(dt - estimator.dt_s) > 1e-6:
+            raise CliError(f"sample {i}: dt_s={dt:g} s but the estimator works at {estimator.dt_s:g} s")
+        if isinstance(estimator, OracleEstimator):
+            estimator.set_ground_truth(s["eta"])
+        t0 = time.perf_counter()
+        prob = estimator.geofence(s["image_prev"], s["image_latest"], acc.thresholds_s)
+        eta_hat = estimator.motion_in_depth(s["image_prev"], s["image_latest"])
+        latency = (time.perf_counter() - t0) * 1e3
+        acc.add(prob, eta_hat, s["eta"].numpy(), s["valid"].numpy().astype(bool),
+                s["instance"].numpy(), latency_ms=latency)
+    result = acc.result()
+    result["pairs"] = n
+    result["miou_thresholds_s"] = [float(t) for t in np.round(acc.miou_thresholds_s, 4)]
+    return result
+
+
+def format_table(r: dict) -> str:
+    lines = [f"{'metric':<22} {'value':>10}", f"{'mIoU (0.2-2 s)':<22} {r['miou']:>10.4f}",
+             f"{'MiD (x1e4)':<22} {r['mid']:>10.1f}"]
+    lines += [f"{'error rate tau=' + k + ' s':<22} {v:>10.4f}" for k, v in r["error_rate"].items()]
+    lines += [f"{'actor IoU tau=' + k + ' s':<22} {v:>10.4f}" for k, v in r["actor_iou"].items()]
+    lines.append(f"{'latency ms/pair':<22} {r['latency_ms']:>10.2f}")
+    return "\n".join(lines)
+
+
+def run(args) -> int:
+    out = _check(args)
+    from bittc_core.estimator import make_estimator
+    from bittc_core.train.data import open_split
+
+    dataset = open_split(args.data, args.split)
+    estimator = make_estimator(args.method, weights=args.weights, device=args.device)
+    result = {"method": args.method, "split": args.split, "data": args.data,
+              "weights": args.weights, **evaluate(estimator, dataset, args.limit)}
+    print(format_table(result))
+    fd, tmp = tempfile.mkstemp(prefix=f".{out.name}.", suffix=".tmp", dir=out.parent)
+    with os.fdopen(fd, "w") as f:
+        json.dump(result, f, indent=2)
+    os.replace(tmp, out)
+    print(f"wrote {out}")
+    return 0

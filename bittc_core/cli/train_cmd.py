@@ -1,0 +1,130 @@
+"""`bittc train --data DIR --config NAME --out CKPT`: train the Binary-TTC network.
+
+Writes beside CKPT: CKPT (best by val mIoU), <stem>.last.pt (resumable), <stem>.csv
+(log) and <stem>.config.yaml (resolved config). ``--stage all`` runs flow, binary and
+continuous in turn, ``--steps`` each, weights carried over.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import os
+import sys
+import tempfile
+from pathlib import Path
+
+from bittc_core.errors import CliError
+
+STAGE_CHOICES = ("flow", "binary", "continuous", "all")
+DEVICES = ("auto", "cpu", "cuda")
+
+
+def add_parser(sub) -> argparse.ArgumentParser:
+    p = sub.add_parser("train", help="train the Binary-TTC network",
+                       description=__doc__.split("\n\n", 1)[1])
+    p.add_argument("--data", required=True, help="dataset folder, or 'synthetic' for the built-in generator")
+    p.add_argument("--config", required=True, help="model config name (paper, cpu-small, tiny)")
+    p.add_argument("--out", required=True, help="best checkpoint path, *.pt")
+    p.add_argument("--resume", action="store_true", help="continue from <stem>.last.pt")
+    p.add_argument("--init", default=None, help="start from the weights of this checkpoint (same config)")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--steps", type=int, default=2000, help="optimiser steps per stage (default 2000)")
+    p.add_argument("--batch-size", type=int, default=8)
+    p.add_argument("--lr", type=float, default=3e-4, help="peak learning rate (default 3e-4)")
+    p.add_argument("--val-every", type=int, default=250, help="steps between validations")
+    p.add_argument("--val-limit", type=int, default=64, help="validation pairs")
+    p.add_argument("--device", default="auto", help="auto, cpu or cuda")
+    p.add_argument("--stage", default="binary", help="flow, binary, continuous or all (default binary)")
+    return p
+
+
+def _check(args) -> None:
+    from bittc_core.model import CONFIGS
+
+    if args.config not in CONFIGS:
+        raise CliError(f"--config {args.config!r}: expected one of {sorted(CONFIGS)}")
+    if args.stage not in STAGE_CHOICES:
+        raise CliError(f"--stage {args.stage!r}: expected one of {STAGE_CHOICES}")
+    if args.device not in DEVICES:
+        raise CliError(f"--device {args.device!r}: expected one of {DEVICES}")
+    for flag, value in (("--steps", args.steps), ("--batch-size", args.batch_size),
+                        ("--val-every", args.val_every), ("--val-limit", args.val_limit)):
+        if value <= 0:
+            raise CliError(f"{flag} {value}: must be > 0")
+    if args.seed < 0:
+        raise CliError(f"--seed {args.seed}: must be >= 0")
+    if not 0 < args.lr < 1:
+        raise CliError(f"--lr {args.lr}: must be in (0, 1)")
+    if not args.out.endswith(".pt"):
+        raise CliError(f"--out {args.out!r}: expected a file name ending in .pt")
+    if args.resume and args.init:
+        raise CliError("--resume and --init exclude each other")
+    if args.init and not Path(args.init).is_file():
+        raise CliError(f"--init {args.init!r}: no such file")
+
+
+def write_yaml_atomic(path: Path, data: dict) -> None:
+    import yaml
+
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    with os.fdopen(fd, "w") as f:
+        yaml.safe_dump(data, f, sort_keys=False)
+    os.replace(tmp, path)
+
+
+def run(args) -> int:
+    _check(args)
+    import torch
+
+    from bittc_core.checkpoint import build_network, load_checkpoint, pick_device
+    from bittc_core.model import BinaryTTCNet, get_config
+    from bittc_core.train import STAGES, RunPaths, TrainConfig, Trainer
+    from bittc_core.train.data import open_split
+
+    paths = RunPaths.from_out(args.out)
+    try:
+        paths.best.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        raise CliError(f"--out {args.out!r}: cannot create its folder ({err})") from None
+    if args.resume and not paths.last.is_file():
+        raise CliError(f"--resume: no resumable checkpoint at {str(paths.last)!r}")
+    if not args.resume and (paths.last.exists() or paths.csv.exists()):
+        raise CliError(f"--out {args.out!r}: a run already exists there ({paths.last.name}); "
+                       "pass --resume or choose another --out")
+    device = pick_device(args.device)
+    torch.manual_seed(args.seed)
+    if args.init:
+        net = build_network(load_checkpoint(args.init, map_location="cpu", expected_config=args.config))
+    else:
+        net = BinaryTTCNet(get_config(args.config))
+    train_set = open_split(args.data, "train", augment=True, seed=args.seed)
+    val_set = open_split(args.data, "val", seed=args.seed)
+    stages = list(STAGES) if args.stage == "all" else [args.stage]
+    resume_stage = None
+    if args.resume:
+        state = load_checkpoint(paths.last, map_location="cpu", expected_config=args.config).get("train_state", {})
+        resume_stage = state.get("stage")
+        if resume_stage not in stages:
+            raise CliError(f"--resume: {paths.last.name} is at stage {resume_stage!r}, not in {stages}")
+        stages = stages[stages.index(resume_stage):]
+
+    base = TrainConfig(steps=args.steps, batch_size=args.batch_size, lr=args.lr,
+                       val_every=args.val_every, val_limit=args.val_limit, seed=args.seed)
+    write_yaml_atomic(paths.config, {
+        "argv": list(sys.argv),
+        "data": args.data, "device": str(device), "stages": stages,
+        "model_config_name": args.config,
+        "model_config": dataclasses.asdict(net.config),
+        "train_config": dataclasses.asdict(base),
+    })
+    meta = {"data": args.data, "seed": args.seed}
+    for stage in stages:
+        cfg = dataclasses.replace(base, stage=stage)
+        trainer = Trainer(net, args.config, cfg, train_set, val_set, device, paths, meta)
+        if stage == resume_stage:
+            trainer.resume()
+        summary = trainer.run()
+        print(" ".join(f"{k}={v:.4f}" if isinstance(v, float) else f"{k}={v}" for k, v in summary.items()))
+    print(f"wrote {paths.best} (best), {paths.last}, {paths.csv}, {paths.config}")
+    return 0

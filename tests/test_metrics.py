@@ -1,0 +1,89 @@
+"""Metrics on hand-made maps with known IoU, MiD and error rates."""
+
+import math
+
+import numpy as np
+import pytest
+
+from bittc_core.metrics import (MetricAccumulator, class_counts, mid_terms, miou_thresholds_s,
+                                two_class_iou)
+from bittc_core.ttc import eta_to_tau, tau_to_eta
+
+
+def test_two_class_iou_known_values():
+    truth = np.array([[1, 1, 0, 0]], bool)
+    pred = np.array([[1, 0, 0, 0]], bool)
+    valid = np.ones_like(truth)
+    # inside: I=1, U=2 -> 0.5; outside: I=2, U=3 -> 2/3
+    assert two_class_iou(class_counts(pred, truth, valid)) == pytest.approx((0.5 + 2 / 3) / 2)
+    # the invalid pixel is ignored: inside 1/1, outside 2/2
+    valid[0, 1] = False
+    assert two_class_iou(class_counts(pred, truth, valid)) == pytest.approx(1.0)
+    # a class absent from truth and prediction is skipped, not counted as 0 or 1
+    none = np.zeros_like(truth)
+    assert two_class_iou(class_counts(none, none, np.ones_like(truth))) == pytest.approx(1.0)
+    assert math.isnan(two_class_iou(class_counts(pred, truth, np.zeros_like(truth))))
+
+
+def test_miou_thresholds_span_the_table1_range_uniformly_in_eta():
+    taus = miou_thresholds_s(0.1)
+    assert taus[0] == pytest.approx(0.2) and taus[-1] == pytest.approx(2.0)
+    assert np.allclose(np.diff(tau_to_eta(taus, 0.1)), np.diff(tau_to_eta(taus, 0.1))[0])
+
+
+def test_mid_known_value():
+    eta = np.array([[0.9, 1.0, 1.1, 3.0]])
+    eta_hat = eta * np.exp([[0.01, -0.02, 0.0, 5.0]])  # the last pixel has |log eta| > log 2
+    s, n = mid_terms(eta_hat, eta, np.ones_like(eta, bool))
+    assert n == 3 and s / n * 1e4 == pytest.approx(100.0)
+
+
+def test_accumulator_perfect_and_inverted_predictions():
+    dt = 0.1
+    eta = np.full((4, 6), 0.99)  # tau = 9.9 s: outside every metric geofence
+    eta[:, :2] = tau_to_eta(0.5, dt)  # actor at 0.5 s
+    eta[:, 2] = tau_to_eta(1.5, dt)
+    instance = np.zeros(eta.shape, np.int64)
+    instance[:, :3] = 1
+    valid = np.ones(eta.shape, bool)
+    acc = MetricAccumulator(dt_s=dt)
+    truth = np.stack([(eta > 0) & (eta <= tau_to_eta(t, dt)) for t in acc.thresholds_s]).astype(np.float32)
+    acc.add(truth, eta, eta, valid, instance, latency_ms=4.0)
+    r = acc.result()
+    assert r["miou"] == pytest.approx(1.0) and r["mid"] == pytest.approx(0.0)
+    assert r["error_rate"] == {"1": 0.0, "2": 0.0, "5": 0.0}
+    assert r["actor_iou"] == {"1": 1.0, "2": 1.0} and r["latency_ms"] == 4.0
+    wrong = MetricAccumulator(dt_s=dt)
+    wrong.add(1.0 - truth, eta * 1.01, eta, valid, instance)
+    r = wrong.result()
+    assert r["miou"] == 0.0 and r["error_rate"]["1"] == 1.0 and r["actor_iou"]["2"] == 0.0
+    assert r["mid"] == pytest.approx(np.log(1.01) * 1e4)
+
+
+def test_ttc_conventions():
+    assert eta_to_tau(0.5, 0.1) == pytest.approx(0.1)
+    assert eta_to_tau(1.0, 0.1) == np.inf
+    assert eta_to_tau(1.25, 0.1) == pytest.approx(-0.5)
+    assert tau_to_eta(eta_to_tau(0.93, 0.1), 0.1) == pytest.approx(0.93)
+
+
+def test_eval_of_the_oracle_is_perfect_and_writes_json(tmp_path):
+    import argparse
+    import json
+
+    from bittc_core.cli import eval_cmd
+
+    out = tmp_path / "o.json"
+    a = argparse.Namespace(data="synthetic", method="oracle", weights=None, out=str(out), split="val",
+                           limit=2, device="cpu")
+    assert eval_cmd.run(a) == 0
+    r = json.loads(out.read_text())
+    assert r["miou"] == pytest.approx(1.0) and r["mid"] == pytest.approx(0.0) and r["pairs"] == 2
+    assert set(r["error_rate"]) == {"1", "2", "5"} and set(r["actor_iou"]) == {"1", "2"}
+    assert r["latency_ms"] > 0
+    from bittc_core.errors import CliError
+
+    with pytest.raises(CliError, match="--limit 0"):
+        eval_cmd.run(argparse.Namespace(**{**vars(a), "limit": 0}))
+    with pytest.raises(CliError, match="--method 'magic'"):
+        eval_cmd.run(argparse.Namespace(**{**vars(a), "method": "magic"}))

@@ -1,0 +1,58 @@
+"""Checkpoint round trip, wrong config, corrupt file, missing default weights."""
+
+import dataclasses
+
+import pytest
+import torch
+
+from bittc_core.checkpoint import (DEFAULT_WEIGHTS, CheckpointError, build_network, load_checkpoint,
+                                   make_payload, save_checkpoint)
+from bittc_core.model import BinaryTTCNet, get_config
+
+
+def test_round_trip_rebuilds_the_same_network(tmp_path):
+    torch.manual_seed(0)
+    net = BinaryTTCNet(get_config("tiny")).eval()
+    path = tmp_path / "m.pt"
+    save_checkpoint(path, make_payload(net, "tiny", {"step": 3}))
+    assert not list(tmp_path.glob("*.tmp"))  # the temp file was renamed
+    ckpt = load_checkpoint(path, map_location="cpu", expected_config="tiny")
+    assert ckpt["config"] == dataclasses.asdict(get_config("tiny")) and ckpt["train_meta"]["step"] == 3
+    loaded = build_network(ckpt).eval()
+    x = torch.rand(1, 3, 24, 48), torch.rand(1, 3, 24, 48), torch.tensor([[0.8, 0.95]])
+    with torch.no_grad():
+        torch.testing.assert_close(loaded(*x), net(*x))
+
+
+def test_wrong_config_is_a_clear_error(tmp_path):
+    path = tmp_path / "m.pt"
+    save_checkpoint(path, make_payload(BinaryTTCNet(get_config("tiny")), "tiny", {}))
+    with pytest.raises(CheckpointError, match="'tiny', not 'cpu-small'"):
+        load_checkpoint(path, expected_config="cpu-small")
+    # a payload claiming a name whose sizes differ
+    payload = make_payload(BinaryTTCNet(get_config("tiny")), "cpu-small", {})
+    save_checkpoint(path, payload)
+    with pytest.raises(CheckpointError, match="sizes differ"):
+        load_checkpoint(path, expected_config="cpu-small")
+
+
+def test_corrupt_or_foreign_file(tmp_path):
+    path = tmp_path / "bad.pt"
+    path.write_bytes(b"not a checkpoint at all")
+    with pytest.raises(CheckpointError, match="corrupt"):
+        load_checkpoint(path)
+    torch.save({"weights": torch.zeros(2)}, path)
+    with pytest.raises(CheckpointError, match="lacks the keys"):
+        load_checkpoint(path)
+    good = tmp_path / "good.pt"
+    save_checkpoint(good, make_payload(BinaryTTCNet(get_config("tiny")), "tiny", {}))
+    path.write_bytes(good.read_bytes()[:500])  # truncated
+    with pytest.raises(CheckpointError, match="corrupt"):
+        load_checkpoint(path)
+
+
+def test_missing_default_weights_names_the_training_command(monkeypatch, tmp_path):
+    if DEFAULT_WEIGHTS.exists():
+        pytest.skip("default weights are shipped")
+    with pytest.raises(CheckpointError, match="bittc train .*bittc_default.pt"):
+        load_checkpoint(DEFAULT_WEIGHTS)

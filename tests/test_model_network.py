@@ -1,0 +1,94 @@
+"""The tiny network: shapes, gradients, batching of thresholds, split convs, AUC, sizes."""
+
+import pytest
+import torch
+
+from bittc_core.model import CONFIGS, BinaryTTCNet, count_parameters, get_config
+from bittc_core.model.auc import auc_eta, uniform_levels
+from bittc_core.model.segnet import _broadcast_add
+
+H, W = 48, 96
+
+
+@pytest.fixture
+def net():
+    torch.manual_seed(0)
+    return BinaryTTCNet(get_config("tiny"))
+
+
+def frames(b=2, seed=0):
+    g = torch.Generator().manual_seed(seed)
+    return torch.rand(b, 3, H, W, generator=g), torch.rand(b, 3, H, W, generator=g)
+
+
+def test_forward_backward_shapes_and_gradients(net):
+    prev, latest = frames()
+    b = prev.shape[0]
+    feats = net.extract(torch.cat((prev, latest)))
+    assert feats.shape == (2 * b, net.config.feat_channels, H // 3, W // 3)
+    ctx = net.prepare_reference(feats[b:], latest)
+    ttc = net.classify_eta(ctx, feats[:b], torch.tensor([[0.7, 0.9, 1.05]]).expand(b, -1))
+    flow = net.classify_shift(ctx, feats[:b], torch.tensor([[[3.0, -6.0]]]).expand(b, -1, -1))
+    cont = net.continuous(ctx, feats[:b])
+    assert ttc.shape == (b, 3, H, W) and flow.shape == (b, 1, 2, H, W)
+    assert cont.prob_le.shape == (b, net.config.cont_levels, H, W) and cont.log_eta.shape == (b, 1, H, W)
+    (ttc.mean() + flow.mean() + cont.log_eta.mean()).backward()
+    grads = {n: p.grad for n, p in net.named_parameters()}
+    assert all(g is not None and torch.isfinite(g).all() for g in grads.values()), \
+        [n for n, g in grads.items() if g is None]
+
+
+def test_thresholds_batched_equal_one_at_a_time(net):
+    net.eval()
+    prev, latest = frames(b=1)
+    eta = torch.tensor([[0.75, 0.9, 1.1]])
+    with torch.no_grad():
+        together = net(prev, latest, eta)
+        alone = torch.cat([net(prev, latest, eta[:, i:i + 1]) for i in range(3)], dim=1)
+    torch.testing.assert_close(together, alone, atol=1e-5, rtol=1e-4)
+
+
+def test_split_conv_equals_conv_of_concatenation():
+    torch.manual_seed(0)
+    a_part, b_part = torch.nn.Conv2d(4, 6, 3, padding=1), torch.nn.Conv2d(4, 6, 3, padding=1, bias=False)
+    whole = torch.nn.Conv2d(8, 6, 3, padding=1)
+    with torch.no_grad():
+        whole.weight.copy_(torch.cat((a_part.weight, b_part.weight), dim=1))
+        whole.bias.copy_(a_part.bias)
+    ref = torch.randn(2, 4, 8, 8)  # two reference frames
+    warped = torch.randn(6, 4, 8, 8)  # three hypotheses each
+    split = _broadcast_add(a_part(ref), b_part(warped))
+    full = whole(torch.cat((ref.repeat_interleave(3, dim=0), warped), dim=1))
+    torch.testing.assert_close(split, full, atol=1e-5, rtol=1e-5)
+
+
+def test_auc_of_a_step_returns_its_location():
+    lo, hi, k = 0.6, 1.2, 24
+    levels = uniform_levels(lo, hi, k)
+    step = (hi - lo) / k
+    for m in (0, 5, 13, 24):  # step on a bin edge: exact
+        edge = lo + m * step
+        prob_le = (levels >= edge).float()[None, :, None, None]  # p(eta <= eta_i) of eta* = edge
+        assert auc_eta(prob_le, lo, hi).item() == pytest.approx(edge, abs=1e-6)
+    for eta_star in (0.71, 0.9333, 1.05):  # inside a bin: that bin's centre, within d/2
+        prob_le = (levels >= eta_star).float()[None, :, None, None]
+        assert abs(auc_eta(prob_le, lo, hi).item() - eta_star) <= step / 2 + 1e-6
+    # a symmetric smooth transition centred on a level gives that level
+    centre = levels[10].item()
+    prob_le = torch.sigmoid((levels - centre) / 0.01)[None, :, None, None]
+    assert auc_eta(prob_le, lo, hi).item() == pytest.approx(centre, abs=1e-4)
+
+
+def test_image_size_must_be_multiple_of_three(net):
+    with pytest.raises(ValueError, match="multiples of 3"):
+        net.extract(torch.rand(1, 3, 50, 96))
+
+
+def test_registered_config_sizes():
+    with torch.device("meta"):
+        paper = count_parameters(BinaryTTCNet(CONFIGS["paper"]))
+        small = count_parameters(BinaryTTCNet(CONFIGS["cpu-small"]))
+        tiny = count_parameters(BinaryTTCNet(CONFIGS["tiny"]))
+    assert 88e6 < paper < 94e6  # "about 91 M"
+    assert tiny < small < 2e6
+    assert CONFIGS["paper"].norm == "none" and CONFIGS["cpu-small"].norm != "none"

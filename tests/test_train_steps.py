@@ -1,0 +1,104 @@
+"""Training: a few steps lower the loss; resume restores the state; flags are validated."""
+
+import argparse
+
+import pytest
+import torch
+
+from bittc_core.cli import train_cmd
+from bittc_core.data.synthetic import SyntheticConfig, SyntheticPairs
+from bittc_core.errors import CliError
+from bittc_core.model import BinaryTTCNet, get_config
+from bittc_core.train import RunPaths, TrainConfig, Trainer
+from bittc_core.train.targets import eta_labels, shift_labels
+
+SMALL = SyntheticConfig(height_px=48, width_px=96, patch_half_size_px=(6.0, 20.0), max_translation_px=6.0)
+
+
+def make_trainer(tmp_path, stage, steps=30, **kw):
+    torch.manual_seed(0)
+    cfg = TrainConfig(stage=stage, steps=steps, batch_size=4, lr=3e-3, warmup_steps=3,
+                      val_every=steps, val_limit=4, log_every=5, **kw)
+    data = SyntheticPairs(16, SMALL, seed=1)
+    return Trainer(BinaryTTCNet(get_config("tiny")), "tiny", cfg, data, SyntheticPairs(4, SMALL, seed=2),
+                   torch.device("cpu"), RunPaths.from_out(tmp_path / "m.pt"))
+
+
+@pytest.mark.parametrize("stage", ["flow", "binary"])
+def test_a_few_steps_lower_the_loss(tmp_path, stage):
+    tr = make_trainer(tmp_path, stage)
+    batch = next(iter(tr.loader))  # one fixed batch: the loss must go down on it
+    losses = []
+    for step in range(30):
+        for g in tr.opt.param_groups:
+            g["lr"] = tr.lr_at(step)
+        tr.gen.manual_seed(0)  # same hypotheses each step
+        loss = tr.losses(batch)["loss"]
+        tr.opt.zero_grad()
+        loss.backward()
+        tr.opt.step()
+        losses.append(loss.item())
+    assert sum(losses[-3:]) / 3 < 0.8 * sum(losses[:3]) / 3, losses
+
+
+def test_continuous_stage_loss_is_finite_and_differentiable(tmp_path):
+    tr = make_trainer(tmp_path, "continuous")
+    parts = tr.losses(next(iter(tr.loader)))
+    assert torch.isfinite(parts["loss"]) and parts["cont"] > 0
+    parts["loss"].backward()
+
+
+def test_run_writes_outputs_and_resume_restores_state(tmp_path):
+    tr = make_trainer(tmp_path, "binary", steps=4)
+    summary = tr.run()
+    paths = tr.paths
+    assert paths.best.is_file() and paths.last.is_file() and paths.csv.is_file()
+    assert summary["steps"] == 4 and 0.0 <= summary["best_val_miou"] <= 1.0
+    again = make_trainer(tmp_path, "binary", steps=4)
+    again.resume()
+    assert again.step == 4 and again.best == pytest.approx(tr.best)
+    assert torch.equal(again.gen.get_state(), tr.gen.get_state())
+    for a, b in zip(again.net.state_dict().values(), tr.net.state_dict().values()):
+        assert torch.equal(a, b)
+    wrong = make_trainer(tmp_path, "flow", steps=4)
+    with pytest.raises(ValueError, match="stage 'binary', not 'flow'"):
+        wrong.resume()
+
+
+def test_labels():
+    eta = torch.tensor([[[0.5, 0.9, 1.0, 1.2, -1.0]]])
+    lab = eta_labels(eta, torch.tensor([[0.9, 1.1]]))
+    assert lab[0, 0, 0].tolist() == [1, 1, 0, 0, 0] and lab[0, 1, 0].tolist() == [1, 1, 1, 0, 0]
+    flow = torch.tensor([[[[4.0, -2.0]], [[0.0, 7.0]]]])  # (1, 2, 1, 2)
+    sl = shift_labels(flow, torch.tensor([[[3.0, 3.0]]]))
+    assert sl[0, 0, 0, 0].tolist() == [1, 0] and sl[0, 0, 1, 0].tolist() == [0, 1]
+
+
+def args(**kw):
+    base = dict(data="synthetic", config="tiny", out="m.pt", resume=False, init=None, seed=0, steps=10,
+                batch_size=2, lr=3e-4, val_every=5, val_limit=4, device="cpu", stage="binary")
+    base.update(kw)
+    return argparse.Namespace(**base)
+
+
+@pytest.mark.parametrize("kw, match", [
+    (dict(config="huge"), "--config 'huge'"),
+    (dict(stage="fast"), "--stage 'fast'"),
+    (dict(steps=0), "--steps 0"),
+    (dict(batch_size=-2), "--batch-size -2"),
+    (dict(lr=5.0), "--lr 5.0"),
+    (dict(out="model.bin"), "model.bin"),
+    (dict(device="tpu"), "--device 'tpu'"),
+    (dict(seed=-1), "--seed -1"),
+    (dict(resume=True, init="x.pt"), "exclude"),
+])
+def test_train_flags_are_validated(kw, match):
+    with pytest.raises(CliError, match=match):
+        train_cmd._check(args(**kw))
+
+
+def test_train_cli_refuses_to_overwrite_a_run(tmp_path):
+    out = tmp_path / "m.pt"
+    (tmp_path / "m.last.pt").write_bytes(b"x")
+    with pytest.raises(CliError, match="pass --resume"):
+        train_cmd.run(args(out=str(out)))
