@@ -10,6 +10,8 @@ Convention:
       flow_px = (u1 - u0, v1 - v0): where the point is in the latest frame minus where
               it was in the previous one (so x_prev = x_latest - flow).
     ``valid`` is False for sky and for points behind the previous camera.
+    eta within ETA_ONE_TOL of 1 is set to exactly 1 (tau = +inf): a point moving exactly
+    with the camera otherwise gets a random sign from float rounding.
 """
 
 from __future__ import annotations
@@ -17,6 +19,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+
+
+ETA_ONE_TOL = 1e-9
 
 
 @dataclass
@@ -81,13 +86,18 @@ def compute_ground_truth(
         lut[k] = M
     chain = cam0_T_world[None] @ lut @ world_T_cam1[None]  # (n_ids, 4, 4)
     idx = np.clip(instance, 0, None)
-    P_c0 = np.einsum("hwij,hwj->hwi", chain[idx], P_c1)
+    P_c0 = P_c1 @ chain[0].T  # static world (and sky, masked below)
+    for k in np.unique(idx):
+        if k > 0:
+            m = idx == k
+            P_c0[m] = P_c1[m] @ chain[k].T
     Z0 = P_c0[..., 2]
     valid = (instance >= 0) & (Z1 < far_m) & (Z0 > 1e-3)
     with np.errstate(divide="ignore", invalid="ignore"):
         eta = np.where(valid, Z1 / Z0, 1.0)
         u0 = fx * P_c0[..., 0] / Z0 + cx
         v0 = fy * P_c0[..., 1] / Z0 + cy
+    eta[np.abs(eta - 1.0) < ETA_ONE_TOL] = 1.0  # rounding of an exactly co-moving point
     flow = np.stack([u1 - u0, v1 - v0], axis=-1)
     flow[~valid] = 0.0
     tau = tau_from_eta(eta, dt_s)

@@ -21,7 +21,9 @@ from sim.traffic import ActuatorConfig, EgoVehicle, ScriptedVehicle, build_road
 from sim.vehicles import EGO_SIZE_M, footprint_corners, footprints_overlap, sample_spec
 from sim.world import World
 
-MOTIONS = ("approaching", "receding", "oncoming", "crossing", "lateral", "stationary", "braking")
+MOTIONS = ("approaching", "receding", "oncoming", "crossing", "lateral", "stationary", "braking", "following")
+TTC_RANGE_S = (0.5, 20.0)  # closing actors are placed at a TTC drawn log-uniformly from this range [s]
+X_RANGE_M = (6.0, 120.0)  # distance ahead of the ego [m]
 CLASSES = ("car", "car", "car", "gvt", "van", "truck")
 MAX_ACTORS = 12
 EGO_MAX_SPEED_MPS = 130 / 3.6  # [m/s]
@@ -71,7 +73,7 @@ def _actor_motion(rng: np.random.Generator, motion: str, road: RoadConfig, v_ego
     """(x, y, heading, speed, accel, keep_lateral) for one actor."""
     lanes = list(range(-road.lanes_right, road.lanes_left + 1))
     lane_y = road.lane_center_y_m(int(rng.choice(lanes))) + float(rng.uniform(-0.4, 0.4))
-    x = float(rng.uniform(6.0, 90.0))
+    x = float(rng.uniform(*X_RANGE_M))
     heading, accel, keep = 0.0, 0.0, True
     if motion == "approaching":
         speed = max(0.0, v_ego - float(rng.uniform(1.0, 20.0)))
@@ -89,8 +91,17 @@ def _actor_motion(rng: np.random.Generator, motion: str, road: RoadConfig, v_ego
         speed, keep = max(0.0, v_ego + float(rng.uniform(-8.0, 8.0))), False
     elif motion == "stationary":
         speed = 0.0
+    elif motion == "following":  # moves exactly like the ego: eta = 1, tau = inf
+        speed = v_ego
     else:  # braking
         speed, accel = max(0.0, v_ego + float(rng.uniform(-5.0, 5.0))), -float(rng.uniform(2.0, 8.0))
+    closing = v_ego - speed * math.cos(heading)
+    if motion != "crossing" and closing < -0.5:  # opening gap: keep it near enough to cover pixels
+        x = float(rng.uniform(X_RANGE_M[0], 50.0))
+    if motion != "crossing" and closing > 0.5:
+        # spread TTCs evenly on a log scale instead of letting near, fast actors dominate
+        ttc = math.exp(rng.uniform(math.log(TTC_RANGE_S[0]), math.log(TTC_RANGE_S[1])))
+        x = float(np.clip(ttc * closing, *X_RANGE_M))
     return x, lane_y, heading, speed, accel, keep
 
 
@@ -100,7 +111,7 @@ def render_clip(sample_seed: int, base_camera: CameraConfig, clip_length: int, b
     camera = random_camera(rng, base_camera)
     road = random_road(rng)
     v_ego = 0.0 if rng.random() < 0.08 else float(rng.uniform(0.0, EGO_MAX_SPEED_MPS))
-    ego_decel = float(rng.uniform(2.0, 7.0)) if rng.random() < 0.15 else 0.0
+    ego_decel = float(rng.uniform(2.0, 7.0)) if rng.random() < 0.1 else 0.0
     hw_road = build_road(road, seed=sample_seed % (2**31))
     n_sub = max(1, int(round(camera.dt_s / SIM_DT_S)))
     sim_dt = camera.dt_s / n_sub
