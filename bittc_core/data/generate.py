@@ -186,6 +186,23 @@ def _progress(total: int, enabled: bool):
     return tqdm(total=total, unit="sample", disable=not enabled, smoothing=0.1, file=sys.stderr)
 
 
+def _account(results, split: str, attempts: dict, queue: list, failed: list, bar) -> int:
+    """Tally worker results: count successes, queue retries, record final failures."""
+    written = 0
+    for index, _sec, err in results:
+        attempts[index] += 1
+        if err is None:
+            written += 1
+            bar.update(1)
+        elif attempts[index] < MAX_ATTEMPTS:
+            print(f"sample {split}/{index} failed (try {attempts[index]}), retrying:\n{err}", file=sys.stderr)
+            queue.append(index)
+        else:
+            print(f"sample {split}/{index} failed {MAX_ATTEMPTS} times:\n{err}", file=sys.stderr)
+            failed.append(index)
+    return written
+
+
 def _run_local(cfg, split_dir, split, todo, workers, _addr, progress):
     cfg_dict = asdict(cfg)
     attempts = {i: 0 for i in todo}
@@ -201,17 +218,7 @@ def _run_local(cfg, split_dir, split, todo, workers, _addr, progress):
             args = [(cfg_dict, str(split_dir), split, i) for i in queue]
             results = pool.imap_unordered(_star, args, chunksize=4) if pool else map(_star, args)
             queue = []
-            for index, _sec, err in results:
-                attempts[index] += 1
-                if err is None:
-                    written += 1
-                    bar.update(1)
-                elif attempts[index] < MAX_ATTEMPTS:
-                    print(f"sample {split}/{index} failed (try {attempts[index]}), retrying:\n{err}", file=sys.stderr)
-                    queue.append(index)
-                else:
-                    print(f"sample {split}/{index} failed {MAX_ATTEMPTS} times:\n{err}", file=sys.stderr)
-                    failed.append(index)
+            written += _account(results, split, attempts, queue, failed, bar)
     finally:
         bar.close()
         if pool is not None:
@@ -254,16 +261,7 @@ def _run_ray(cfg, split_dir, split, todo, workers, address, progress):
                 except Exception as e:  # the task itself died MAX_ATTEMPTS times
                     print(f"a Ray task failed after its retries: {e}", file=sys.stderr)
                     continue
-                for index, _sec, err in results:
-                    attempts[index] += 1
-                    if err is None:
-                        written += 1
-                        bar.update(1)
-                    elif attempts[index] < MAX_ATTEMPTS:
-                        print(f"sample {split}/{index} failed (try {attempts[index]}), retrying:\n{err}", file=sys.stderr)
-                        queue.append(index)
-                    else:
-                        failed.append(index)
+                written += _account(results, split, attempts, queue, failed, bar)
         # samples of tasks that died without a result: still missing on disk
         missing = [i for i in todo if not (split_dir / sample_dirname(i)).exists() and i not in failed]
         failed.extend(missing)
