@@ -30,6 +30,8 @@ travels in ``info``, never in the observation. The scenery seed is drawn from
 
 from __future__ import annotations
 
+from dataclasses import asdict
+
 import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
@@ -69,9 +71,17 @@ class ScenarioEnv(gym.Env):
         return {"image": self._frame.image, "ego_speed_mps": np.array([min(self._sim.ego.speed, MAX_SPEED_MPS)], np.float32)}
 
     def _info(self, truth) -> dict:
+        """Ground truth as plain dicts and arrays: per-actor truth, the critical actor,
+        the collision, and (from the second frame on) the per-pixel maps."""
+        info = {
+            "t_s": truth.t_s,
+            "actors": [asdict(a) for a in truth.actors],
+            "critical": asdict(truth.critical) if truth.critical is not None else None,
+            "collision": asdict(truth.collision) if truth.collision is not None else None,
+        }
         if self._prev is not None:
-            truth.gt = self._sim.ground_truth(self._prev, self._frame)
-        return {"t_s": truth.t_s, "truth": truth, "collision": truth.collision is not None}
+            info["gt"] = asdict(self._sim.ground_truth(self._prev, self._frame))
+        return info
 
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         super().reset(seed=seed)
