@@ -53,8 +53,13 @@ class RunPaths:
 
 
 def _forever(loader: DataLoader):
+    """Endless batches; datasets with ``set_epoch`` (TTCDataset) redraw augmentations."""
+    epoch = 0
     while True:
+        if hasattr(loader.dataset, "set_epoch"):
+            loader.dataset.set_epoch(epoch)
         yield from loader
+        epoch += 1
 
 
 class Trainer:
