@@ -94,6 +94,8 @@ class ScenarioCase:
 
 _TOP_KEYS = {"name", "description", "threat", "case_name", "duration_s", "road", "ego", "actors", "traffic"}
 _ROAD_KEYS = {f.name for f in fields(RoadConfig)}
+_ROAD_COMPUTED = {"x_start_m", "x_end_m", "markings_max_x_m"}  # set by the simulator from the scenario
+_ROAD_DEFAULTS = {f.name: f.default for f in fields(RoadConfig)}
 _EGO_KEYS = {f.name for f in fields(EgoSpec)}
 _ACTOR_KEYS = {f.name for f in fields(ActorSpec)}
 _LC_KEYS = {f.name for f in fields(LaneChange)}
@@ -218,10 +220,21 @@ def _resolve(r: dict, case_name: str, src: str) -> ScenarioCase:
         raise _fail(src, "threat", r["threat"], "must be true or false")
     duration = _number(src, "duration_s", r.get("duration_s", 12.0), 0.5, 120.0)
     road_raw = r.get("road") or {}
-    _check_keys(src, "road", road_raw, _ROAD_KEYS)
+    _check_keys(src, "road", road_raw, _ROAD_KEYS - _ROAD_COMPUTED)
+    road_kw = {}
+    for k, v in road_raw.items():
+        default = _ROAD_DEFAULTS[k]
+        if isinstance(default, bool):
+            if not isinstance(v, bool):
+                raise _fail(src, f"road.{k}", v, "must be true or false")
+            road_kw[k] = v
+        elif isinstance(default, int):
+            road_kw[k] = _int(src, f"road.{k}", v, 0, 6)
+        else:
+            road_kw[k] = _number(src, f"road.{k}", v, 0.0, 1e4, lo_open=True)
     try:
-        road = RoadConfig(**road_raw)
-    except (TypeError, ValueError) as e:
+        road = RoadConfig(**road_kw)
+    except ValueError as e:
         raise ConfigError(f"{src}: road: {e}") from None
     ego = EgoSpec(speed_kph=_number(src, "ego.speed_kph", r["ego"].get("speed_kph", 50.0), 0.0, 200.0))
     actors = []

@@ -101,16 +101,17 @@ def run_case(
             if not (math.isfinite(cmd.decel_mps2) and cmd.decel_mps2 >= 0):
                 raise ValueError(f"controller {controller.name!r} returned decel_mps2 = {cmd.decel_mps2}")
             queue.push(sim.t_s + max(cmd.compute_latency_s, 0.0), cmd)
-            if writer is not None and frame is not None:
-                writer.write(_video_frame(frame.image, truth, queue.active, sim, writer.scale_for(camera.width_px)))
-            rows.append(_trace_row(sim, truth, queue.active, cmd))
-            for _ in range(sim.n_sub):
+            for k in range(sim.n_sub):
                 if queue.update(sim.t_s):
                     a = queue.active
                     if a.warning and first_warn is None:
                         first_warn = (sim.t_s, _crit_ttc(sim))
                     if a.decel_mps2 > 0 and first_brake is None:
                         first_brake = (sim.t_s, _crit_ttc(sim))
+                if k == 0:  # the row shows the command in effect at the frame's capture time
+                    rows.append(_trace_row(sim, truth, queue.active, cmd))
+                    if writer is not None and frame is not None:
+                        writer.write(_video_frame(frame.image, truth, queue.active, sim, writer.scale_for(camera.width_px)))
                 sim.substep(queue.active.decel_mps2)
             steps += 1
             truth = sim.truth()

@@ -52,6 +52,7 @@ class VideoWriter:
     def write(self, image_rgb: np.ndarray) -> None:
         if self._writer is None:
             h, w = image_rgb.shape[:2]
+            self.path.parent.mkdir(parents=True, exist_ok=True)
             self._writer = cv2.VideoWriter(str(self.tmp), cv2.VideoWriter_fourcc(*"mp4v"), self.fps, (w, h))
             if not self._writer.isOpened():
                 raise OSError(f"cannot open a video writer for {self.tmp}")

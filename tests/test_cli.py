@@ -73,3 +73,13 @@ def test_suite_table(tmp_path, capsys):
     out = capsys.readouterr().out
     assert "threats avoided: 1/1" in out and "false alarms: 0/1" in out
     assert (tmp_path / "summary.csv").read_text().count("\n") == 3
+
+
+def test_sweep_with_video_writes_one_video_per_case(tmp_path):
+    assert main(["suite", "--out", str(tmp_path), "--scenarios", "CCRs-10,CCRs-20", "--video"]) == 0
+    assert (tmp_path / "CCRs-10" / "camera.mp4").exists() and (tmp_path / "CCRs-20" / "camera.mp4").exists()
+
+
+def test_seed_out_of_range(tmp_path, capsys):
+    assert main(["run", "CCRs-50", "--controller", "oracle", "--out", str(tmp_path / "o"), "--seed", str(2**33)]) == 2
+    assert "--seed" in capsys.readouterr().err

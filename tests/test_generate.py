@@ -1,6 +1,5 @@
 """`bittc generate`: determinism across workers/backends, kill-and-resume, format, bad input."""
 
-import filecmp
 import json
 import os
 import signal
@@ -147,9 +146,12 @@ def test_ray_missing_gives_a_clear_error(tmp_path, capsys, monkeypatch):
     assert "pip install 'bittc-sim[ray]'" in capsys.readouterr().err
 
 
-def test_data_stats(tmp_path, capsys):
+def test_data_stats_match_the_card(tmp_path, capsys):
     generate(tmp_path, SMALL, "val", 2, workers=1, backend="local", progress=False)
-    assert main(["data", "stats", str(tmp_path)]) == 0
-    out = capsys.readouterr().out
-    assert "val" in out and "[0, 0.5)" in out
-    assert filecmp.cmp(tmp_path / "manifest.jsonl", tmp_path / "manifest.jsonl")
+    assert main(["data", "stats", str(tmp_path), "--json"]) == 0
+    stats = json.loads(capsys.readouterr().out)
+    card = json.loads((tmp_path / "dataset_card.json").read_text())
+    assert stats["splits"]["val"]["samples"] == 2
+    assert stats["tau_histogram_actor_px"] == card["tau_histogram_actor_px"]
+    manifest = [json.loads(line) for line in (tmp_path / "manifest.jsonl").read_text().splitlines()]
+    assert [m["seed"] for m in manifest] == [1_000_000_000, 1_000_000_001]

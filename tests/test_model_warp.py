@@ -79,3 +79,23 @@ def test_hypotheses_are_batch_major():
     torch.testing.assert_close(out[0], src[0])
     torch.testing.assert_close(out[2], src[1])
     torch.testing.assert_close(out[3], scale_warp(src[1:], eta[1:, 1:], unpadded())[0])
+
+
+def test_stem_feature_pixel_i_sees_input_pixels_3i_to_3i_plus_2():
+    """The 1/3-resolution grid is centred where the warps and the upsampling assume."""
+    import torch
+
+    from bittc_core.model.config import get_config
+    from bittc_core.model.extractor import FeatExtractNet
+
+    cfg = get_config("tiny")
+    net = FeatExtractNet(stem_channels=cfg.stem_channels, out_channels=cfg.feat_channels, res_blocks=1,
+                         pool_sizes=cfg.spp_pool_sizes, spp_channels=cfg.spp_channels, norm="none").eval()
+    stem = net.stem[0][0]
+    base = torch.zeros(1, 3, 12, 12)
+    out0 = stem(base)
+    for x in range(12):
+        img = base.clone()
+        img[0, :, 4, x] = 1.0
+        changed = (stem(img) - out0).abs().sum(dim=(0, 1, 2)) > 0
+        assert changed.nonzero().flatten().tolist() == [x // 3]

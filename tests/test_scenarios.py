@@ -94,3 +94,17 @@ def test_malformed_yaml(tmp_path):
     f.write_text("name: [unclosed\n")
     with pytest.raises(ConfigError, match="malformed YAML"):
         scenarios.resolve(str(f))
+
+
+@pytest.mark.parametrize(
+    "road,needle",
+    [({"barrier": "no"}, "road.barrier = 'no'"), ({"lanes_left": 1.5}, "road.lanes_left = 1.5"),
+     ({"x_end_m": 50}, "x_end_m"), ({"lane_width_m": [3, 4]}, "road.lane_width_m")],
+)
+def test_bad_road_fields_are_rejected(tmp_path, road, needle):
+    raw = {"name": "x", "threat": True, "ego": {"speed_kph": 50}, "road": road, "actors": []}
+    f = tmp_path / "bad.yaml"
+    f.write_text(yaml.safe_dump(raw))
+    with pytest.raises(ConfigError) as e:
+        scenarios.resolve(str(f))
+    assert needle in str(e.value)

@@ -27,10 +27,13 @@ def positive_int(name: str, value: int) -> int:
     return value
 
 
-def non_negative_int(name: str, value: int) -> int:
-    if value < 0:
-        raise CliError(f"{name} {value}: must be >= 0")
+def non_negative_int(name: str, value: int, upper: int | None = None) -> int:
+    if value < 0 or (upper is not None and value > upper):
+        raise CliError(f"{name} {value}: must be in [0, {upper}]" if upper is not None else f"{name} {value}: must be >= 0")
     return value
+
+
+MAX_SEED = 2**32 - 1
 
 
 def writable_dir(path: str) -> Path:

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import controllers
 import scenarios
-from bittc_core.cli.common import non_negative_int, parse_size, writable_dir
+from bittc_core.cli.common import MAX_SEED, non_negative_int, parse_size, writable_dir
 from bittc_core.errors import CliError
 from sim.camera import CameraConfig
 
@@ -59,7 +59,7 @@ def run(args) -> int:
     from sim.runner import run_case
     from sim.suite import format_table, run_cases
 
-    non_negative_int("--seed", args.seed)
+    non_negative_int("--seed", args.seed, MAX_SEED)
     camera = camera_from_args(args)
     cases = scenarios.resolve(args.scenario)
     out = writable_dir(args.out)

@@ -6,7 +6,7 @@ import argparse
 
 import controllers
 import scenarios
-from bittc_core.cli.common import non_negative_int, writable_dir
+from bittc_core.cli.common import MAX_SEED, non_negative_int, writable_dir
 from bittc_core.cli.run_cmd import add_camera_flags, camera_from_args
 
 
@@ -26,7 +26,7 @@ def add_parser(sub) -> argparse.ArgumentParser:
 def run(args) -> int:
     from sim.suite import format_table, run_cases
 
-    non_negative_int("--seed", args.seed)
+    non_negative_int("--seed", args.seed, MAX_SEED)
     camera = camera_from_args(args)
     if args.scenarios:
         cases = [c for name in args.scenarios.split(",") for c in scenarios.resolve(name.strip())]

@@ -100,6 +100,11 @@ def run(args) -> int:
         net = BinaryTTCNet(get_config(args.config))
     train_set = open_split(args.data, "train", augment=True, seed=args.seed)
     val_set = open_split(args.data, "val", seed=args.seed)
+    for name, ds in (("train", train_set), ("val", val_set)):
+        dt = float(ds[0]["dt_s"])
+        if abs(dt - net.config.frame_dt_s) > 1e-6:
+            raise CliError(f"--data {args.data!r}: the {name} split has frame interval dt_s = {dt:g} s, but config "
+                           f"{args.config!r} is trained at frame_dt_s = {net.config.frame_dt_s:g} s")
     stages = list(STAGES) if args.stage == "all" else [args.stage]
     resume_stage = None
     if args.resume:

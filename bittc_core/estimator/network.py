@@ -62,7 +62,7 @@ class BittcEstimator(Estimator):
                 return cached, feats
         feats = self.net.extract(image)
         self.feature_computations += 1
-        self._features[self._next_key] = (image, feats)
+        self._features[self._next_key] = (image.clone(), feats)  # the caller may reuse its buffer
         self._next_key += 1
         while len(self._features) > CACHED_FRAMES:
             self._features.popitem(last=False)

@@ -42,7 +42,8 @@ class FeatExtractNet(nn.Module):
                  pool_sizes: tuple[int, ...], spp_channels: int, norm: str) -> None:
         super().__init__()
         self.stem = nn.Sequential(
-            ConvNormAct(3, stem_channels, kernel=3, stride=3, norm=norm),
+            # no padding: feature pixel i sees input pixels 3i..3i+2 exactly (centre 3i+1)
+            ConvNormAct(3, stem_channels, kernel=3, stride=3, norm=norm, padding=0),
             ConvNormAct(stem_channels, stem_channels, norm=norm),
         )
         self.blocks = nn.Sequential(*[ResBlock(stem_channels, norm) for _ in range(res_blocks)])

@@ -21,19 +21,19 @@ def make_norm(norm: str, channels: int) -> nn.Module:
 
 
 def conv(in_ch: int, out_ch: int, kernel: int = 3, stride: int = 1, dilation: int = 1,
-         bias: bool = True) -> nn.Conv2d:
-    """A 'same'-padded convolution (for odd kernels)."""
-    return nn.Conv2d(in_ch, out_ch, kernel, stride=stride, padding=dilation * (kernel // 2),
-                     dilation=dilation, bias=bias)
+         bias: bool = True, padding: int | None = None) -> nn.Conv2d:
+    """A convolution, 'same'-padded (odd kernels) unless ``padding`` is given."""
+    pad = dilation * (kernel // 2) if padding is None else padding
+    return nn.Conv2d(in_ch, out_ch, kernel, stride=stride, padding=pad, dilation=dilation, bias=bias)
 
 
 class ConvNormAct(nn.Sequential):
     """conv -> norm -> LeakyReLU(0.1); the conv has a bias only when there is no norm."""
 
     def __init__(self, in_ch: int, out_ch: int, *, kernel: int = 3, stride: int = 1,
-                 dilation: int = 1, norm: str = "none", act: bool = True) -> None:
+                 dilation: int = 1, norm: str = "none", act: bool = True, padding: int | None = None) -> None:
         super().__init__(
-            conv(in_ch, out_ch, kernel, stride, dilation, bias=norm == "none"),
+            conv(in_ch, out_ch, kernel, stride, dilation, bias=norm == "none", padding=padding),
             make_norm(norm, out_ch),
             nn.LeakyReLU(LEAKY_SLOPE, inplace=True) if act else nn.Identity(),
         )

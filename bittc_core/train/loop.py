@@ -52,9 +52,9 @@ class RunPaths:
                    csv=stem.with_suffix(".csv"), config=stem.with_name(stem.name + ".config.yaml"))
 
 
-def _forever(loader: DataLoader):
-    """Endless batches; datasets with ``set_epoch`` (TTCDataset) redraw augmentations."""
-    epoch = 0
+def _forever(loader: DataLoader, epoch: int = 0):
+    """Endless batches from ``epoch`` on; datasets with ``set_epoch`` (TTCDataset) redraw
+    augmentations per epoch (a resumed run continues at its epoch)."""
     while True:
         if hasattr(loader.dataset, "set_epoch"):
             loader.dataset.set_epoch(epoch)
@@ -140,8 +140,8 @@ class Trainer:
         save_checkpoint(self.paths.last, make_payload(self.net, self.config_name, self._meta(), state))
 
     def resume(self) -> None:
-        ckpt = load_checkpoint(self.paths.last, map_location=self.device,
-                               expected_config=self.config_name)
+        # RNG states must stay CPU tensors; the optimizer state follows the parameters
+        ckpt = load_checkpoint(self.paths.last, map_location="cpu", expected_config=self.config_name)
         state = ckpt.get("train_state")
         if state is None:
             raise ValueError(f"{self.paths.last} holds no training state")
@@ -166,7 +166,7 @@ class Trainer:
     def run(self) -> dict:
         c = self.cfg
         self.net.train()
-        batches = _forever(self.loader)
+        batches = _forever(self.loader, epoch=self.step // max(len(self.loader), 1))
         bar = tqdm(total=c.steps, initial=self.step, desc=f"train {c.stage}", mininterval=1.0)
         last_val: dict = {}
         t0 = time.perf_counter()

@@ -1,0 +1,19 @@
+#!/usr/bin/env bash
+# Reproduce the shipped weights bittc_core/weights/bittc_default.pt on a CPU (or a GPU
+# with --device cuda appended to each train command).
+#   1. data:  bittc generate --out data/bittc_v1 --split {val,test,train} ... (see README)
+#   2. this:  bash docs/train_default_weights.sh data/bittc_v1 runs/default
+# Stages as in the paper: binary-flow pre-training, binary TTC with binary flow as the
+# auxiliary task (0.8 / 0.2), continuous fine-tuning (BCE 0.1 + SmoothL1 on the AUC 0.9).
+set -euo pipefail
+DATA=${1:-data/bittc_v1}
+OUT=${2:-runs/default}
+FLOW_STEPS=${FLOW_STEPS:-800}
+BINARY_STEPS=${BINARY_STEPS:-6000}
+CONT_STEPS=${CONT_STEPS:-800}
+mkdir -p "$OUT"
+bittc train --data "$DATA" --config cpu-small --stage flow --steps "$FLOW_STEPS" --seed 0 --out "$OUT/flow.pt"
+bittc train --data "$DATA" --config cpu-small --stage binary --steps "$BINARY_STEPS" --seed 0 --init "$OUT/flow.pt" --out "$OUT/binary.pt"
+bittc train --data "$DATA" --config cpu-small --stage continuous --steps "$CONT_STEPS" --seed 0 --lr 1e-4 --init "$OUT/binary.pt" --out "$OUT/continuous.pt"
+cp "$OUT/continuous.pt" bittc_core/weights/bittc_default.pt
+echo "wrote bittc_core/weights/bittc_default.pt"
