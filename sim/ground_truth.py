@@ -10,7 +10,8 @@ Convention:
       flow_px = (u1 - u0, v1 - v0): where the point is in the latest frame minus where
               it was in the previous one (so x_prev = x_latest - flow).
     ``valid`` is False for sky and for points behind the previous camera.
-    eta within ETA_ONE_TOL of 1 is set to exactly 1 (tau = +inf): a point moving exactly
+    eta within ETA_ONE_TOL of 1 is set to exactly 1 (tau = +inf), so the stored float32
+    eta and tau agree; a point moving exactly
     with the camera otherwise gets a random sign from float rounding.
 """
 
@@ -21,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 
-ETA_ONE_TOL = 1e-9
+ETA_ONE_TOL = 1e-7  # below this |eta - 1| rounds to 1.0 in float32 anyway
 
 
 @dataclass
