@@ -8,12 +8,12 @@
 set -euo pipefail
 DATA=${1:-data/bittc_v1}
 OUT=${2:-runs/default}
-FLOW_STEPS=${FLOW_STEPS:-800}
+FLOW_STEPS=${FLOW_STEPS:-600}
 BINARY_STEPS=${BINARY_STEPS:-6000}
-CONT_STEPS=${CONT_STEPS:-800}
+CONT_STEPS=${CONT_STEPS:-250}
 mkdir -p "$OUT"
 bittc train --data "$DATA" --config cpu-small --stage flow --steps "$FLOW_STEPS" --seed 0 --out "$OUT/flow.pt"
 bittc train --data "$DATA" --config cpu-small --stage binary --steps "$BINARY_STEPS" --seed 0 --init "$OUT/flow.pt" --out "$OUT/binary.pt"
-bittc train --data "$DATA" --config cpu-small --stage continuous --steps "$CONT_STEPS" --seed 0 --lr 1e-4 --init "$OUT/binary.pt" --out "$OUT/continuous.pt"
+bittc train --data "$DATA" --config cpu-small --stage continuous --steps "$CONT_STEPS" --seed 0 --lr 1e-4 --val-every 125 --init "$OUT/binary.pt" --out "$OUT/continuous.pt"
 cp "$OUT/continuous.pt" bittc_core/weights/bittc_default.pt
 echo "wrote bittc_core/weights/bittc_default.pt"
