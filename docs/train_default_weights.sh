@@ -15,5 +15,9 @@ mkdir -p "$OUT"
 bittc train --data "$DATA" --config cpu-small --stage flow --steps "$FLOW_STEPS" --seed 0 --out "$OUT/flow.pt"
 bittc train --data "$DATA" --config cpu-small --stage binary --steps "$BINARY_STEPS" --seed 0 --init "$OUT/flow.pt" --out "$OUT/binary.pt"
 bittc train --data "$DATA" --config cpu-small --stage continuous --steps "$CONT_STEPS" --seed 0 --lr 1e-4 --val-every 125 --init "$OUT/binary.pt" --out "$OUT/continuous.pt"
-cp "$OUT/continuous.pt" bittc_core/weights/bittc_default.pt
+# ship the end of the continuous stage (its MiD is far better than the mid-stage checkpoint
+# that the val-mIoU criterion keeps), without the optimizer state
+python -c "import sys; from bittc_core.checkpoint import load_checkpoint, save_checkpoint
+c = load_checkpoint(sys.argv[1], map_location='cpu'); c.pop('train_state', None); save_checkpoint(sys.argv[2], c)" \
+    "$OUT/continuous.last.pt" bittc_core/weights/bittc_default.pt
 echo "wrote bittc_core/weights/bittc_default.pt"
