@@ -18,6 +18,6 @@ bittc train --data "$DATA" --config cpu-small --stage continuous --steps "$CONT_
 # ship the end of the continuous stage (its MiD is far better than the mid-stage checkpoint
 # that the val-mIoU criterion keeps), without the optimizer state
 python -c "import sys; from bittc_core.checkpoint import load_checkpoint, save_checkpoint
-c = load_checkpoint(sys.argv[1], map_location='cpu'); c.pop('train_state', None); save_checkpoint(sys.argv[2], c)" \
+c = load_checkpoint(sys.argv[1], map_location='cpu'); [c.pop(k, None) for k in ('train_state', 'model_config')]; save_checkpoint(sys.argv[2], c)" \
     "$OUT/continuous.last.pt" bittc_core/weights/bittc_default.pt
 echo "wrote bittc_core/weights/bittc_default.pt"
