@@ -113,14 +113,6 @@ def rotation_xyz_deg(roll_deg: float, pitch_deg: float, yaw_deg: float) -> np.nd
     return Rz @ Ry @ Rx
 
 
-def world_T_ego(x_m: float, y_m: float, heading_rad: float) -> np.ndarray:
-    """4x4 pose of the ego frame in the world (planar vehicle on flat ground)."""
-    T = np.eye(4)
-    T[:3, :3] = rotation_xyz_deg(0.0, 0.0, math.degrees(heading_rad))
-    T[:3, 3] = [x_m, y_m, 0.0]
-    return T
-
-
 def cam_T_ego(cfg: CameraConfig, jitter_rpy_deg: tuple[float, float, float] = (0, 0, 0)) -> np.ndarray:
     """4x4 transform from the ego frame to the OpenCV camera frame.
 

@@ -15,7 +15,7 @@ import numpy as np
 from scenarios.spec import ActorSpec, ScenarioCase
 from sim.actor_truth import ActorTruth, actor_truth, footprint_distance
 from sim.camera import CameraConfig, cam_T_ego
-from sim.ground_truth import GroundTruth, compute_ground_truth, planar_pose
+from sim.ground_truth import GroundTruth, body_motions, camera_pose, compute_ground_truth
 from sim.traffic import ActuatorConfig, EgoVehicle, ScriptedVehicle, TrafficVehicle, build_road
 from sim.vehicles import EGO_SIZE_M, VehicleSpec, footprint_corners, footprints_overlap, sample_spec
 
@@ -194,8 +194,7 @@ class ScenarioSim:
         jitter = (0.0, 0.0, 0.0)
         if self.camera.jitter_deg > 0:
             jitter = tuple(self.rng.normal(0.0, self.camera.jitter_deg, 3))
-        x, y, h = self.ego.world_pose()
-        return cam_T_ego(self.camera, jitter) @ np.linalg.inv(planar_pose(x, y, h))
+        return camera_pose(cam_T_ego(self.camera, jitter), self.ego.world_pose())
 
     def capture(self) -> Frame:
         """Render the current state (poses mirrored into PyBullet first)."""
@@ -209,7 +208,7 @@ class ScenarioSim:
         return Frame(self.t_s, r.rgb, cam_T_world, poses, r.depth_m, r.instance)
 
     def ground_truth(self, prev: Frame, latest: Frame) -> GroundTruth:
-        motions = {i: planar_pose(*prev.poses[i]) @ np.linalg.inv(planar_pose(*latest.poses[i])) for i in latest.poses}
+        motions = body_motions(prev.poses, latest.poses)
         return compute_ground_truth(latest.depth_m, latest.instance, self.camera.K(), latest.cam_T_world, prev.cam_T_world,
                                     motions, latest.t_s - prev.t_s, self.camera.far_m)  # fmt: skip
 

@@ -120,3 +120,14 @@ def planar_pose(x_m: float, y_m: float, heading_rad: float) -> np.ndarray:
     T[:2, :2] = [[c, -s], [s, c]]
     T[:2, 3] = [x_m, y_m]
     return T
+
+
+def body_motions(poses_prev: dict, poses_latest: dict) -> dict[int, np.ndarray]:
+    """instance -> ``world(t0) <- world(t1)`` motion from planar poses (x, y, heading)
+    at both frames, as :func:`compute_ground_truth` takes it."""
+    return {i: planar_pose(*poses_prev[i]) @ np.linalg.inv(planar_pose(*poses_latest[i])) for i in poses_latest}
+
+
+def camera_pose(cam_T_ego_: np.ndarray, ego_pose: tuple[float, float, float]) -> np.ndarray:
+    """OpenCV ``cam_T_world`` of a camera mounted by ``cam_T_ego_`` on an ego at (x, y, heading)."""
+    return cam_T_ego_ @ np.linalg.inv(planar_pose(*ego_pose))

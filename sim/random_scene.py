@@ -14,7 +14,7 @@ from dataclasses import asdict, dataclass, replace
 import numpy as np
 
 from sim.camera import CameraConfig, cam_T_ego
-from sim.ground_truth import GroundTruth, compute_ground_truth, planar_pose
+from sim.ground_truth import GroundTruth, body_motions, camera_pose, compute_ground_truth
 from sim.scenery import RoadConfig
 from sim.textures import TextureBank
 from sim.traffic import ActuatorConfig, EgoVehicle, ScriptedVehicle, build_road
@@ -151,7 +151,7 @@ def render_clip(sample_seed: int, base_camera: CameraConfig, clip_length: int, b
                 world.set_vehicle_pose(inst, *pose)
             jitter = tuple(rng.normal(0.0, camera.jitter_deg, 3)) if camera.jitter_deg > 0 else (0.0, 0.0, 0.0)
             ex, ey, eh = ego.world_pose()
-            cam_T_world = cam_T_ego(camera, jitter) @ np.linalg.inv(planar_pose(ex, ey, eh))
+            cam_T_world = camera_pose(cam_T_ego(camera, jitter), (ex, ey, eh))
             r = world.render(cam_T_world)
             images.append(r.rgb)
             frames.append((r, cam_T_world, poses))
@@ -165,7 +165,7 @@ def render_clip(sample_seed: int, base_camera: CameraConfig, clip_length: int, b
         gts = []
         for j in range(1, clip_length):
             (r0, c0, p0), (r1, c1, p1) = frames[j - 1], frames[j]
-            motions = {i: planar_pose(*p0[i]) @ np.linalg.inv(planar_pose(*p1[i])) for i in p1}
+            motions = body_motions(p0, p1)
             gts.append(compute_ground_truth(r1.depth_m, r1.instance, camera.K(), c1, c0, motions, camera.dt_s, camera.far_m))
     finally:
         world.close()

@@ -78,7 +78,9 @@ class World:
             el = self.rng.uniform(math.radians(25), math.radians(70))
             light_direction = (math.cos(az) * math.cos(el), math.sin(az) * math.cos(el), math.sin(el))
         self.light_direction = tuple(float(v) for v in light_direction)
-        self._sky = textures.sky_gradient(camera.height_px * camera.supersample, camera.width_px * camera.supersample, camera.height_px * camera.supersample * 0.5)
+        # sky images per render height (output and, when supersampling, the larger render)
+        self._sky = {h: textures.sky_gradient(h, w, h * 0.5) for h, w in
+                     {(camera.height_px * k, camera.width_px * k) for k in (1, camera.supersample)}}
         build_scenery(self, road, self.rng)
 
     # ------------------------------------------------------------------ lifecycle
@@ -228,6 +230,5 @@ class World:
             sky = seg < 0
         else:
             sky = np.asarray(depth).reshape(h, w) >= 1.0
-        sky_img = self._sky if self._sky.shape[0] == h else textures.sky_gradient(h, w, h * 0.5)
-        rgb[sky] = sky_img[sky]
+        rgb[sky] = self._sky[h][sky]
         return rgb, np.asarray(depth, np.float32).reshape(h, w), seg
