@@ -105,8 +105,15 @@ def _actor_motion(rng: np.random.Generator, motion: str, road: RoadConfig, v_ego
     return x, lane_y, heading, speed, accel, keep
 
 
-def render_clip(sample_seed: int, base_camera: CameraConfig, clip_length: int, bank: TextureBank) -> Clip:
-    """Draw a scene from ``sample_seed`` and render ``clip_length`` frames of it."""
+def render_clip(sample_seed: int, base_camera: CameraConfig, clip_length: int, bank: TextureBank,
+                world: World | None = None) -> Clip:
+    """Draw a scene from ``sample_seed`` and render ``clip_length`` frames of it.
+
+    ``world``: a world built on ``bank`` to rebuild in place (``World.reset``) instead of
+    building and closing a new one; the clip's bytes are the same either way.
+    """
+    if world is not None and world.bank is not bank:
+        raise ValueError("render_clip: the world must use the given texture bank")
     rng = np.random.default_rng(sample_seed)
     camera = random_camera(rng, base_camera)
     road = random_road(rng)
@@ -117,7 +124,12 @@ def render_clip(sample_seed: int, base_camera: CameraConfig, clip_length: int, b
     sim_dt = camera.dt_s / n_sub
     ego = EgoVehicle(hw_road, 0.0, 0.0, v_ego, EGO_SIZE_M[0], EGO_SIZE_M[1], ActuatorConfig(delay_s=0.0), sim_dt)
     hw_road.vehicles.append(ego)
-    world = World(camera, road, seed=int(rng.integers(2**31)), bank=bank)
+    world_seed = int(rng.integers(2**31))
+    owned = world is None
+    if owned:
+        world = World(camera, road, seed=world_seed, bank=bank)
+    else:
+        world.reset(camera, road, seed=world_seed)
     try:
         actors = []
         taken = [footprint_corners(0.0, 0.0, 0.0, EGO_SIZE_M[0] + 2.0, EGO_SIZE_M[1] + 1.0)]
@@ -168,7 +180,8 @@ def render_clip(sample_seed: int, base_camera: CameraConfig, clip_length: int, b
             motions = body_motions(p0, p1)
             gts.append(compute_ground_truth(r1.depth_m, r1.instance, camera.K(), c1, c0, motions, camera.dt_s, camera.far_m))
     finally:
-        world.close()
+        if owned:
+            world.close()
     fx, fy, cx, cy = camera.intrinsics()
     meta = {
         "sample_seed": int(sample_seed),

@@ -55,8 +55,37 @@ class RoadConfig:
         return lane * self.lane_width_m
 
 
+@dataclass(frozen=True)
+class StaticShape:
+    """A static box (``size_m`` = half extents [m]) or sphere (``size_m`` = (radius [m],))."""
+
+    kind: str  # "box" or "sphere"
+    center_m: tuple[float, float, float]
+    size_m: tuple[float, ...]
+
+
+class _Materials:
+    """Static shapes grouped by material (texture id, colour), in first-use order."""
+
+    def __init__(self) -> None:
+        self.groups: dict[tuple[int | None, tuple[float, ...]], list[StaticShape]] = {}
+
+    def box(self, center_m, half_extents_m, texture_id: int | None, rgb=(1.0, 1.0, 1.0)) -> None:
+        self.groups.setdefault((texture_id, tuple(rgb)), []).append(
+            StaticShape("box", tuple(map(float, center_m)), tuple(map(float, half_extents_m))))
+
+    def sphere(self, center_m, radius_m: float, texture_id: int | None) -> None:
+        self.groups.setdefault((texture_id, (1.0, 1.0, 1.0)), []).append(
+            StaticShape("sphere", tuple(map(float, center_m)), (float(radius_m),)))
+
+    def add_to(self, world: World) -> None:
+        for (texture_id, rgb), shapes in self.groups.items():
+            world.add_static_shapes(shapes, texture_id, rgb)
+
+
 def build_scenery(world: World, road: RoadConfig, rng: np.random.Generator) -> None:
     """Add the road, markings and roadside objects to ``world`` (static bodies)."""
+    m = _Materials()
     x0, x1 = road.x_start_m, road.x_end_m
     yl, yr = road.y_left_edge_m, road.y_right_edge_m
     road_w = yl - yr
@@ -67,26 +96,27 @@ def build_scenery(world: World, road: RoadConfig, rng: np.random.Generator) -> N
     n_seg = int(np.ceil((x1 - x0) / road.segment_m))
     for i in range(n_seg):
         xc = x0 + (i + 0.5) * road.segment_m
-        world.add_static_box((xc, (yl + yr) / 2, -0.05), (road.segment_m / 2, road_w / 2, 0.05), asphalt[i % 2])
+        m.box((xc, (yl + yr) / 2, -0.05), (road.segment_m / 2, road_w / 2, 0.05), asphalt[i % 2])
         for side, edge in ((1, yl), (-1, yr)):  # verges, 30 m wide
-            world.add_static_box((xc, edge + side * 15.0, -0.06), (road.segment_m / 2, 15.0, 0.05), grass[(i + side) % 2])
+            m.box((xc, edge + side * 15.0, -0.06), (road.segment_m / 2, 15.0, 0.05), grass[(i + side) % 2])
         if road.barrier:
             for edge, side in ((yl, 1), (yr, -1)):
-                world.add_static_box((xc, edge + side * 1.2, 0.45), (road.segment_m / 2 - 0.05, 0.15, 0.35), concrete)
+                m.box((xc, edge + side * 1.2, 0.45), (road.segment_m / 2 - 0.05, 0.15, 0.35), concrete)
     # Lane markings: solid edges, dashed separators (3 m dash, 9 m gap).
     white = (0.95, 0.95, 0.95)
     for edge in (yl - 0.15, yr + 0.15):
         for i in range(n_seg):
             xc = x0 + (i + 0.5) * road.segment_m
-            world.add_static_box((xc, edge, 0.003), (road.segment_m / 2, 0.075, 0.003), None, white)
+            m.box((xc, edge, 0.003), (road.segment_m / 2, 0.075, 0.003), None, white)
     for k in range(-road.lanes_right, road.lanes_left):
         y = (k + 0.5) * road.lane_width_m
         for xd in np.arange(x0, x1 if road.markings_max_x_m is None else min(x1, road.markings_max_x_m), 12.0):
-            world.add_static_box((xd + 1.5, y, 0.003), (1.5, 0.075, 0.003), None, white)
-    _roadside(world, road, rng)
+            m.box((xd + 1.5, y, 0.003), (1.5, 0.075, 0.003), None, white)
+    _roadside(world, m, road, rng)
+    m.add_to(world)
 
 
-def _roadside(world: World, road: RoadConfig, rng: np.random.Generator) -> None:
+def _roadside(world: World, m: _Materials, road: RoadConfig, rng: np.random.Generator) -> None:
     """Poles, signs, trees and buildings on both sides, at several lateral depths."""
     v = int(rng.integers(VARIANTS))
     metal = world.texture("metal", v)
@@ -100,19 +130,19 @@ def _roadside(world: World, road: RoadConfig, rng: np.random.Generator) -> None:
             kind = rng.choice(["pole", "tree", "tree", "sign", "building", "building"])
             if kind == "pole":
                 y = edge + side * rng.uniform(2.0, 3.0)
-                world.add_static_box((x, y, 4.0), (0.12, 0.12, 4.0), metal)
+                m.box((x, y, 4.0), (0.12, 0.12, 4.0), metal)
             elif kind == "sign":
                 y = edge + side * rng.uniform(2.0, 3.5)
-                world.add_static_box((x, y, 1.2), (0.06, 0.06, 1.2), metal)
-                world.add_static_box((x, y, 2.9), (0.05, rng.uniform(0.6, 1.5), rng.uniform(0.4, 0.7)), sign)
+                m.box((x, y, 1.2), (0.06, 0.06, 1.2), metal)
+                m.box((x, y, 2.9), (0.05, rng.uniform(0.6, 1.5), rng.uniform(0.4, 0.7)), sign)
             elif kind == "tree":
                 y = edge + side * rng.uniform(3.0, 12.0)
                 h = rng.uniform(2.0, 4.0)
-                world.add_static_box((x, y, h / 2), (0.2, 0.2, h / 2), bark)
+                m.box((x, y, h / 2), (0.2, 0.2, h / 2), bark)
                 r = rng.uniform(1.5, 3.0)
-                world.add_static_sphere((x, y, h + r * 0.8), r, leaves[int(rng.integers(2))])
+                m.sphere((x, y, h + r * 0.8), r, leaves[int(rng.integers(2))])
             elif road.buildings:
                 depth, width, height = rng.uniform(6, 20), rng.uniform(8, 25), rng.uniform(4, 20)
                 y = edge + side * (rng.uniform(12.0, 40.0) + depth / 2)
-                world.add_static_box((x, y, height / 2), (width / 2, depth / 2, height / 2), facades[int(rng.integers(3))])
+                m.box((x, y, height / 2), (width / 2, depth / 2, height / 2), facades[int(rng.integers(3))])
             x += rng.uniform(0.5, 1.5) * road.roadside_spacing_m

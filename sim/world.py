@@ -3,6 +3,11 @@
 Several worlds can live in one process: nothing here touches PyBullet's implicit
 global client. Rendering uses TinyRenderer, whose depth buffer is exact float depth.
 
+Cost: a world is cheap to rebuild in place (``reset``): the client and the textures it
+has loaded are kept, only the bodies are replaced. Static scenery goes in as compound
+bodies of up to ``MAX_SHAPES_PER_BODY`` shapes sharing one material, because
+TinyRenderer pays a fixed cost per body on every render and PyBullet per body created.
+
 Convention: world frame z up, x along the road, y left (see :mod:`sim.camera`).
 Instance ids: -1 = nothing (sky), 0 = static scenery, 1..N = vehicles in the order
 they were added.
@@ -24,9 +29,9 @@ with c_output_suppressed():
     import pybullet as p
     from pybullet_utils import bullet_client
 
-from sim import textures
+from sim import meshes, textures
 from sim.camera import CameraConfig, view_matrix_gl
-from sim.scenery import RoadConfig, build_scenery
+from sim.scenery import RoadConfig, StaticShape, build_scenery
 from sim.vehicles import VehicleSpec, parts
 
 
@@ -41,6 +46,14 @@ class Render:
     rgb: np.ndarray
     depth_m: np.ndarray
     instance: np.ndarray
+
+
+MAX_SHAPES_PER_BODY = 16  # PyBullet renders at most this many shapes of one createVisualShapeArray
+WHEEL_LENGTH_PER_HALF_WIDTH = 4.0  # mesh wheel length / the wheel part's half width
+SPHERES_PER_MESH = 32  # spheres baked into one mesh body
+SCENES_PER_CLIENT = 256  # reconnect after this many resets: removeBody keeps the visual shape records
+
+
 
 
 def _quat_z(heading_rad: float) -> list[float]:
@@ -61,16 +74,42 @@ class World:
 
     def __init__(self, camera: CameraConfig, road: RoadConfig, seed: int, light_direction: tuple[float, float, float] | None = None,
                  bank: textures.TextureBank | None = None):  # fmt: skip
+        self._client: bullet_client.BulletClient | None = None
+        self._tmp = Path(tempfile.mkdtemp(prefix="bittc_world_"))
+        self.bank = bank if bank is not None else textures.TextureBank(seed, self._tmp)
+        self._sky: dict[int, np.ndarray] = {}  # render height -> sky image
+        self._scenes_on_client = 0
+        self.reset(camera, road, seed, light_direction)
+
+    def _connect(self) -> None:
+        if self._client is not None:
+            self._client.disconnect()
+        with c_output_suppressed():
+            self._client = bullet_client.BulletClient(connection_mode=p.DIRECT)
+        self._texture_ids: dict[tuple[str, int, int], int] = {}
+        self._bodies: list[int] = []
+        self._scenes_on_client = 0
+
+    def reset(self, camera: CameraConfig, road: RoadConfig, seed: int,
+              light_direction: tuple[float, float, float] | None = None) -> None:
+        """Replace the scene: new camera, road, scenery and lighting, no vehicles.
+
+        The result renders exactly as a new ``World(camera, road, seed, light_direction,
+        bank)`` would; only the client and its loaded textures are reused.
+        """
+        if self._client is None or self._scenes_on_client >= SCENES_PER_CLIENT:
+            self._connect()
+        else:
+            for uid in self._bodies:
+                self._client.removeBody(uid)
+            self._bodies.clear()
+        self._scenes_on_client += 1
         self.camera = camera
         self.road = road
         self.rng = np.random.default_rng(seed)
-        self._tmp = Path(tempfile.mkdtemp(prefix="bittc_world_"))
-        self.bank = bank if bank is not None else textures.TextureBank(seed, self._tmp)
-        self._texture_ids: dict[tuple[str, int, int], int] = {}
-        with c_output_suppressed():
-            self._client: bullet_client.BulletClient | None = bullet_client.BulletClient(connection_mode=p.DIRECT)
-        self._instance_of_uid: list[int] = []  # PyBullet body uid -> instance id
+        self._instance_of_uid: dict[int, int] = {}  # PyBullet body uid -> instance id
         self._vehicle_uid: dict[int, int] = {}  # instance id -> body uid
+        self._wheel_uid: dict[int, int] = {}  # instance id -> body uid of its wheels
         self._vehicle_pose: dict[int, tuple[float, float, float]] = {}
         self._vehicle_base_z: dict[int, float] = {}  # lower-body centre height [m]
         if light_direction is None:
@@ -79,8 +118,9 @@ class World:
             light_direction = (math.cos(az) * math.cos(el), math.sin(az) * math.cos(el), math.sin(el))
         self.light_direction = tuple(float(v) for v in light_direction)
         # sky images per render height (output and, when supersampling, the larger render)
-        self._sky = {h: textures.sky_gradient(h, w, h * 0.5) for h, w in
-                     {(camera.height_px * k, camera.width_px * k) for k in (1, camera.supersample)}}
+        for h, w in {(camera.height_px * k, camera.width_px * k) for k in (1, camera.supersample)}:
+            if h not in self._sky or self._sky[h].shape[1] != w:
+                self._sky[h] = textures.sky_gradient(h, w, h * 0.5)
         build_scenery(self, road, self.rng)
 
     # ------------------------------------------------------------------ lifecycle
@@ -117,9 +157,40 @@ class World:
         return self._texture_ids[key]
 
     def _register(self, uid: int, instance: int) -> None:
-        while len(self._instance_of_uid) <= uid:
-            self._instance_of_uid.append(-1)
+        if uid < 0:
+            raise RuntimeError("PyBullet failed to create a body")
         self._instance_of_uid[uid] = instance
+        self._bodies.append(uid)
+
+    def add_static_shapes(self, shapes: list[StaticShape], texture_id: int | None, rgb=(1.0, 1.0, 1.0)) -> list[int]:
+        """Add static shapes of one material; returns the body uids.
+
+        Boxes go in compound bodies of up to ``MAX_SHAPES_PER_BODY``; spheres are baked
+        into one low-polygon mesh per ``SPHERES_PER_MESH`` (see :mod:`sim.meshes`).
+        """
+        c = self.client
+        uids = []
+        boxes = [s for s in shapes if s.kind == "box"]
+        spheres = [s for s in shapes if s.kind == "sphere"]
+        if len(boxes) + len(spheres) != len(shapes):
+            raise ValueError(f"unknown static shape kinds {sorted({s.kind for s in shapes} - {'box', 'sphere'})}")
+        for i in range(0, len(boxes), MAX_SHAPES_PER_BODY):
+            chunk = boxes[i:i + MAX_SHAPES_PER_BODY]
+            vs = c.createVisualShapeArray(
+                shapeTypes=[p.GEOM_BOX] * len(chunk), halfExtents=[list(s.size_m) for s in chunk],
+                visualFramePositions=[list(s.center_m) for s in chunk], rgbaColors=[[*rgb, 1.0]] * len(chunk),
+            )  # fmt: skip
+            uids.append(c.createMultiBody(0, -1, vs))
+        for i in range(0, len(spheres), SPHERES_PER_MESH):
+            chunk = spheres[i:i + SPHERES_PER_MESH]
+            mesh = meshes.merge(meshes.SPHERE, [[s.size_m[0]] * 3 for s in chunk], [s.center_m for s in chunk])
+            vs = c.createVisualShape(p.GEOM_MESH, rgbaColor=[*rgb, 1.0], **mesh)
+            uids.append(c.createMultiBody(0, -1, vs))
+        for uid in uids:
+            if texture_id is not None:
+                c.changeVisualShape(uid, -1, textureUniqueId=texture_id)
+            self._register(uid, 0)
+        return uids
 
     def add_static_box(self, center_m, half_extents_m, texture_id: int | None, rgb=(1.0, 1.0, 1.0)) -> int:
         vs = self.client.createVisualShape(p.GEOM_BOX, halfExtents=list(half_extents_m), rgbaColor=[*rgb, 1.0])
@@ -129,53 +200,45 @@ class World:
         self._register(uid, 0)
         return uid
 
-    def add_static_sphere(self, center_m, radius_m: float, texture_id: int | None) -> int:
-        vs = self.client.createVisualShape(p.GEOM_SPHERE, radius=radius_m)
-        uid = self.client.createMultiBody(0, -1, vs, basePosition=list(center_m))
-        if texture_id is not None:
-            self.client.changeVisualShape(uid, -1, textureUniqueId=texture_id)
-        self._register(uid, 0)
-        return uid
-
     def add_vehicle(self, spec: VehicleSpec) -> int:
-        """Add a multi-part vehicle body (hidden below ground until posed); returns its instance id."""
+        """Add a vehicle (hidden below ground until posed); returns its instance id.
+
+        Two bodies: the boxes (lower body at its own centre, the rest as fixed links) and
+        the four wheels as one low-polygon mesh in the footprint frame (see
+        :mod:`sim.meshes`); ``set_vehicle_pose`` moves both.
+        """
         c = self.client
         variant = int(self.rng.integers(textures.VARIANTS))
-        tex = {
-            "paint": self.texture("paint", variant, spec.palette_index),
-            "glass": self.texture("glass", variant, spec.palette_index),
-            "tyre": None,  # plain dark rubber: one texture load less per vehicle
-        }
-        shapes, positions, orientations, tex_ids = [], [], [], []
-        wheel_q = c.getQuaternionFromEuler([math.pi / 2, 0, 0])
-        for part in parts(spec):
-            if part.shape == "box":
-                shapes.append(c.createVisualShape(p.GEOM_BOX, halfExtents=list(part.half_extents_m)))
-                orientations.append([0, 0, 0, 1])
-            else:
-                shapes.append(c.createVisualShape(p.GEOM_CYLINDER, radius=part.half_extents_m[0], length=2 * part.half_extents_m[1],
-                                                  rgbaColor=[0.08, 0.08, 0.08, 1.0]))  # fmt: skip
-                orientations.append(list(wheel_q))
-            positions.append(list(part.center_m))
-            tex_ids.append(tex[part.texture])
+        tex = {"paint": self.texture("paint", variant, spec.palette_index),
+               "glass": self.texture("glass", variant, spec.palette_index)}  # fmt: skip
+        boxes = [part for part in parts(spec) if part.shape == "box"]
+        wheels = [part for part in parts(spec) if part.shape == "wheel"]
+        shapes = [c.createVisualShape(p.GEOM_BOX, halfExtents=list(part.half_extents_m)) for part in boxes]
         n = len(shapes) - 1
-        # The base is the lower body placed at its own centre; links are relative to it.
-        base_pos = np.asarray(positions[0])
+        base_pos = np.asarray(boxes[0].center_m)
         uid = c.createMultiBody(
             0, -1, shapes[0], basePosition=[0, 0, -50.0],
             baseInertialFramePosition=[0, 0, 0],
             linkMasses=[0] * n, linkCollisionShapeIndices=[-1] * n, linkVisualShapeIndices=shapes[1:],
-            linkPositions=[list(np.asarray(q) - base_pos) for q in positions[1:]], linkOrientations=orientations[1:],
+            linkPositions=[list(np.asarray(part.center_m) - base_pos) for part in boxes[1:]], linkOrientations=[[0, 0, 0, 1]] * n,
             linkInertialFramePositions=[[0, 0, 0]] * n, linkInertialFrameOrientations=[[0, 0, 0, 1]] * n,
             linkParentIndices=[0] * n, linkJointTypes=[p.JOINT_FIXED] * n, linkJointAxis=[[0, 0, 1]] * n,
         )  # fmt: skip
-        for link, t in enumerate(tex_ids):
-            if t is not None:
-                c.changeVisualShape(uid, link - 1, textureUniqueId=t)
+        for link, part in enumerate(boxes):
+            c.changeVisualShape(uid, link - 1, textureUniqueId=tex[part.texture])
+        # wheel half extents are (radius, half width, radius); the unit wheel is 1 m long
+        # and twice the part's width, so that it shows beside the body as PyBullet's own
+        # cylinders of that length did
+        mesh = meshes.merge(meshes.WHEEL, [[w.half_extents_m[0], WHEEL_LENGTH_PER_HALF_WIDTH * w.half_extents_m[1], w.half_extents_m[0]] for w in wheels],
+                            [w.center_m for w in wheels])  # fmt: skip
+        wheel_uid = c.createMultiBody(0, -1, c.createVisualShape(p.GEOM_MESH, rgbaColor=[0.08, 0.08, 0.08, 1.0], **mesh),
+                                      basePosition=[0, 0, -50.0])  # fmt: skip
         instance = len(self._vehicle_uid) + 1
         self._vehicle_uid[instance] = uid
+        self._wheel_uid[instance] = wheel_uid
         self._vehicle_base_z[instance] = float(base_pos[2])
         self._register(uid, instance)
+        self._register(wheel_uid, instance)
         return instance
 
     # ------------------------------------------------------------------ state
@@ -184,6 +247,7 @@ class World:
         uid = self._vehicle_uid[instance]
         z = self._vehicle_base_z[instance]
         self.client.resetBasePositionAndOrientation(uid, [x_m, y_m, z], _quat_z(heading_rad))
+        self.client.resetBasePositionAndOrientation(self._wheel_uid[instance], [x_m, y_m, 0.0], _quat_z(heading_rad))
         self._vehicle_pose[instance] = (float(x_m), float(y_m), float(heading_rad))
 
     def vehicle_pose(self, instance: int) -> tuple[float, float, float]:
@@ -191,8 +255,11 @@ class World:
 
     @property
     def instance_lut(self) -> np.ndarray:
-        """int32 array: PyBullet body uid -> instance id."""
-        return np.asarray(self._instance_of_uid, np.int32)
+        """int32 array: PyBullet body uid -> instance id (-1 for uids of no body)."""
+        lut = np.full(max(self._instance_of_uid, default=-1) + 1, -1, np.int32)
+        for uid, inst in self._instance_of_uid.items():
+            lut[uid] = inst
+        return lut
 
     # ------------------------------------------------------------------ rendering
     def render(self, cam_T_world: np.ndarray, with_rgb: bool = True) -> Render:

@@ -15,7 +15,7 @@ import sys
 import tempfile
 import time
 import traceback
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -27,6 +27,8 @@ from bittc_core.errors import CliError
 SPLIT_SEED_BASE = {"train": 0, "val": 1_000_000_000, "test": 2_000_000_000}
 MAX_SAMPLES_PER_SPLIT = 1_000_000_000
 MAX_ATTEMPTS = 3  # tries per sample before the run fails
+LOCAL_CHUNK = 4  # samples per task sent to a local worker process
+RAY_CHUNK = 8  # samples per Ray task
 
 
 @dataclass(frozen=True)
@@ -64,7 +66,8 @@ _WORKER: dict = {}
 
 
 def _worker_init(cfg_dict: dict) -> None:
-    """Per-process state: the camera and a texture bank in a private temporary folder."""
+    """Per-process state: the camera, a texture bank in a private temporary folder and
+    (made at the first sample) one World rebuilt in place for every sample."""
     os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
     import cv2
 
@@ -72,25 +75,42 @@ def _worker_init(cfg_dict: dict) -> None:
     from sim.textures import TextureBank
 
     cv2.setNumThreads(1)
+    _close_worker()
     cfg = GenerationConfig(**cfg_dict)
     bank_dir = Path(tempfile.mkdtemp(prefix="bittc_bank_"))
     _WORKER.update(cfg=cfg, bank=TextureBank(cfg.seed, bank_dir), bank_dir=bank_dir,
                    camera=CameraConfig(height_px=cfg.height_px, width_px=cfg.width_px, fps_hz=cfg.fps_hz, supersample=cfg.supersample))  # fmt: skip
 
 
+def _close_worker() -> None:
+    world = _WORKER.pop("world", None)
+    if world is not None:
+        world.close()
+    if "bank_dir" in _WORKER:
+        shutil.rmtree(_WORKER.pop("bank_dir"), ignore_errors=True)
+    _WORKER.clear()
+
+
 def make_sample(cfg_dict: dict, split_dir: str, split: str, index: int) -> tuple[int, float, str | None]:
     """Render and write one sample; returns (index, seconds, error text or None)."""
     from sim.random_scene import render_clip
+    from sim.scenery import RoadConfig
+    from sim.world import World
 
     if _WORKER.get("cfg") != GenerationConfig(**cfg_dict):
         _worker_init(cfg_dict)
     t0 = time.perf_counter()
     cfg = _WORKER["cfg"]
     try:
-        clip = render_clip(scene_seed(cfg, split, index), _WORKER["camera"], cfg.clip_length, _WORKER["bank"])
+        if "world" not in _WORKER:
+            _WORKER["world"] = World(_WORKER["camera"], RoadConfig(), seed=0, bank=_WORKER["bank"])
+        clip = render_clip(scene_seed(cfg, split, index), _WORKER["camera"], cfg.clip_length, _WORKER["bank"], _WORKER["world"])
         write_sample(Path(split_dir), index, clip, {"split": split, "index": index, "seed": sample_seed(split, index), "dataset_seed": cfg.seed})
         return index, time.perf_counter() - t0, None
-    except Exception:  # reported to the driver, retried there
+    except Exception:  # reported to the driver, retried there with a fresh world
+        world = _WORKER.pop("world", None)
+        if world is not None:
+            world.close()
         return index, time.perf_counter() - t0, traceback.format_exc(limit=4)
 
 
@@ -167,8 +187,11 @@ def generate(out: Path, cfg: GenerationConfig, split: str, n_samples: int, worke
            "written": 0, "failed": [], "workers": workers, "backend": backend}  # fmt: skip
     if todo:
         runner = _run_ray if backend == "ray" else _run_local
-        written, failed = runner(cfg, split_dir, split, todo, workers, ray_address, progress)
-        run["written"], run["failed"] = written, failed
+        tally = runner(cfg, split_dir, split, todo, workers, ray_address, progress)
+        run["written"], run["failed"] = tally.written, sorted(tally.failed)
+        chunk = RAY_CHUNK if backend == "ray" else LOCAL_CHUNK
+        rate = steady_rate(tally.done_at_s, skip=chunk * workers)
+        run["steady_samples_per_s"] = round(rate, 3) if rate else None
     run["seconds"] = round(time.perf_counter() - t0, 2)
     run["samples_per_s"] = round(run["written"] / run["seconds"], 3) if run["written"] else None
     from bittc_core.data.card import rebuild_manifest_and_card
@@ -186,28 +209,52 @@ def _progress(total: int, enabled: bool):
     return tqdm(total=total, unit="sample", disable=not enabled, smoothing=0.1, file=sys.stderr)
 
 
-def _account(results, split: str, attempts: dict, queue: list, failed: list, bar) -> int:
-    """Tally worker results: count successes, queue retries, record final failures."""
-    written = 0
-    for index, _sec, err in results:
-        attempts[index] += 1
-        if err is None:
-            written += 1
-            bar.update(1)
-        elif attempts[index] < MAX_ATTEMPTS:
-            print(f"sample {split}/{index} failed (try {attempts[index]}), retrying:\n{err}", file=sys.stderr)
-            queue.append(index)
-        else:
-            print(f"sample {split}/{index} failed {MAX_ATTEMPTS} times:\n{err}", file=sys.stderr)
-            failed.append(index)
-    return written
+@dataclass
+class _Tally:
+    """The driver's record of worker results: successes (with their completion times),
+    retries to queue, final failures."""
+
+    todo: list[int]
+    bar: object
+    split: str
+    written: int = 0
+    failed: list = field(default_factory=list)
+    done_at_s: list = field(default_factory=list)  # perf_counter() of each success
+
+    def __post_init__(self) -> None:
+        self.attempts = {i: 0 for i in self.todo}
+
+    def account(self, results) -> list[int]:
+        """Tally results; returns the indices to try again."""
+        retry = []
+        for index, _sec, err in results:
+            self.attempts[index] += 1
+            if err is None:
+                self.written += 1
+                self.done_at_s.append(time.perf_counter())
+                self.bar.update(1)
+            elif self.attempts[index] < MAX_ATTEMPTS:
+                print(f"sample {self.split}/{index} failed (try {self.attempts[index]}), retrying:\n{err}", file=sys.stderr)
+                retry.append(index)
+            else:
+                print(f"sample {self.split}/{index} failed {MAX_ATTEMPTS} times:\n{err}", file=sys.stderr)
+                self.failed.append(index)
+        return retry
+
+
+def steady_rate(done_at_s: list[float], skip: int) -> float | None:
+    """Samples/s between the ``skip``-th and the last completion: the throughput once
+    the workers are up (process start, imports and the first world are left out)."""
+    if len(done_at_s) < skip + 2:
+        return None
+    return (len(done_at_s) - 1 - skip) / (done_at_s[-1] - done_at_s[skip])
 
 
 def _run_local(cfg, split_dir, split, todo, workers, _addr, progress):
     cfg_dict = asdict(cfg)
-    attempts = {i: 0 for i in todo}
-    failed, written, queue = [], 0, list(todo)
+    queue = list(todo)
     bar = _progress(len(todo), progress)
+    tally = _Tally(todo, bar, split)
     pool = None
     if workers > 1:
         import multiprocessing as mp
@@ -216,18 +263,15 @@ def _run_local(cfg, split_dir, split, todo, workers, _addr, progress):
     try:
         while queue:
             args = [(cfg_dict, str(split_dir), split, i) for i in queue]
-            results = pool.imap_unordered(_star, args, chunksize=4) if pool else map(_star, args)
-            queue = []
-            written += _account(results, split, attempts, queue, failed, bar)
+            results = pool.imap_unordered(_star, args, chunksize=LOCAL_CHUNK) if pool else map(_star, args)
+            queue = tally.account(results)
     finally:
         bar.close()
         if pool is not None:
             pool.close()
             pool.join()
-        if "bank_dir" in _WORKER:
-            shutil.rmtree(_WORKER.pop("bank_dir"), ignore_errors=True)
-            _WORKER.clear()
-    return written, sorted(failed)
+        _close_worker()
+    return tally
 
 
 def _star(args):
@@ -245,14 +289,12 @@ def _run_ray(cfg, split_dir, split, todo, workers, address, progress):
             ray.init(num_cpus=workers, include_dashboard=False, log_to_driver=False)
     remote = ray.remote(num_cpus=1, max_retries=MAX_ATTEMPTS - 1, retry_exceptions=True)(_make_many)
     cfg_dict = asdict(cfg)
-    chunk = 8
-    attempts = {i: 0 for i in todo}
-    failed, written = [], 0
     bar = _progress(len(todo), progress)
+    tally = _Tally(todo, bar, split)
     try:
         queue = list(todo)
         while queue:
-            refs = [remote.remote(cfg_dict, str(split_dir), split, queue[k : k + chunk]) for k in range(0, len(queue), chunk)]
+            refs = [remote.remote(cfg_dict, str(split_dir), split, queue[k : k + RAY_CHUNK]) for k in range(0, len(queue), RAY_CHUNK)]
             queue = []
             while refs:
                 done, refs = ray.wait(refs, num_returns=1)
@@ -261,13 +303,13 @@ def _run_ray(cfg, split_dir, split, todo, workers, address, progress):
                 except Exception as e:  # the task itself died MAX_ATTEMPTS times
                     print(f"a Ray task failed after its retries: {e}", file=sys.stderr)
                     continue
-                written += _account(results, split, attempts, queue, failed, bar)
+                queue += tally.account(results)
         # samples of tasks that died without a result: still missing on disk
-        missing = [i for i in todo if not (split_dir / sample_dirname(i)).exists() and i not in failed]
-        failed.extend(missing)
+        missing = [i for i in todo if not (split_dir / sample_dirname(i)).exists() and i not in tally.failed]
+        tally.failed.extend(missing)
     finally:
         bar.close()
         if started_here:
             ray.shutdown()
-    return written, sorted(failed)
+    return tally
 
