@@ -5,8 +5,9 @@ global client. Rendering uses TinyRenderer, whose depth buffer is exact float de
 
 Cost: a world is cheap to rebuild in place (``reset``): the client and the textures it
 has loaded are kept, only the bodies are replaced. Static scenery goes in as compound
-bodies of up to ``MAX_SHAPES_PER_BODY`` shapes sharing one material, because
-TinyRenderer pays a fixed cost per body on every render and PyBullet per body created.
+bodies of up to ``MAX_SHAPES_PER_BODY`` shapes sharing one material, because PyBullet
+pays a fixed cost per body created (the render cost is rasterisation and barely
+depends on the body count).
 
 Convention: world frame z up, x along the road, y left (see :mod:`sim.camera`).
 Instance ids: -1 = nothing (sky), 0 = static scenery, 1..N = vehicles in the order
@@ -52,8 +53,6 @@ MAX_SHAPES_PER_BODY = 16  # PyBullet renders at most this many shapes of one cre
 WHEEL_LENGTH_PER_HALF_WIDTH = 4.0  # mesh wheel length / the wheel part's half width
 SPHERES_PER_MESH = 32  # spheres baked into one mesh body
 SCENES_PER_CLIENT = 256  # reconnect after this many resets: removeBody keeps the visual shape records
-
-
 
 
 def _quat_z(heading_rad: float) -> list[float]:

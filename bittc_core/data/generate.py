@@ -82,10 +82,14 @@ def _worker_init(cfg_dict: dict) -> None:
                    camera=CameraConfig(height_px=cfg.height_px, width_px=cfg.width_px, fps_hz=cfg.fps_hz, supersample=cfg.supersample))  # fmt: skip
 
 
-def _close_worker() -> None:
+def _drop_world() -> None:
     world = _WORKER.pop("world", None)
     if world is not None:
         world.close()
+
+
+def _close_worker() -> None:
+    _drop_world()
     if "bank_dir" in _WORKER:
         shutil.rmtree(_WORKER.pop("bank_dir"), ignore_errors=True)
     _WORKER.clear()
@@ -108,9 +112,7 @@ def make_sample(cfg_dict: dict, split_dir: str, split: str, index: int) -> tuple
         write_sample(Path(split_dir), index, clip, {"split": split, "index": index, "seed": sample_seed(split, index), "dataset_seed": cfg.seed})
         return index, time.perf_counter() - t0, None
     except Exception:  # reported to the driver, retried there with a fresh world
-        world = _WORKER.pop("world", None)
-        if world is not None:
-            world.close()
+        _drop_world()
         return index, time.perf_counter() - t0, traceback.format_exc(limit=4)
 
 
