@@ -29,6 +29,15 @@ class UnitMesh:
         self.indices = np.asarray(indices, np.int64)
         self.uvs = np.asarray(uvs, np.float64)
         self.normals = np.asarray(normals, np.float64)
+        self._tiled: dict[int, tuple[list, list, list]] = {}
+
+    def tiled(self, n: int) -> tuple[list, list, list]:
+        """(indices, uvs, unit normals) of ``n`` copies as lists; cached, they do not
+        depend on where the copies go (list conversion is most of a merge's cost)."""
+        if n not in self._tiled:
+            idx = (self.indices[None] + len(self.vertices) * np.arange(n)[:, None]).reshape(-1)
+            self._tiled[n] = (idx.tolist(), self.uvs.tolist() * n, self.normals.tolist() * n)
+        return self._tiled[n]
 
 
 def uv_sphere(rings: int = SPHERE_RINGS, segments: int = SPHERE_SEGMENTS) -> UnitMesh:
@@ -81,13 +90,13 @@ def merge(unit: UnitMesh, scales_m, offsets_m) -> dict:
     """Copies of ``unit`` scaled per axis and offset [m], as createVisualShape keyword args."""
     scales = np.asarray(scales_m, np.float64).reshape(-1, 3)
     offsets = np.asarray(offsets_m, np.float64).reshape(-1, 3)
-    n_v = len(unit.vertices)
     verts = (unit.vertices[None] * scales[:, None] + offsets[:, None]).reshape(-1, 3)
-    normals = unit.normals[None] / scales[:, None]  # normals of a scaled surface
-    normals /= np.maximum(np.linalg.norm(normals, axis=-1, keepdims=True), 1e-12)
-    idx = (unit.indices[None] + n_v * np.arange(len(scales))[:, None]).reshape(-1)
-    return {"vertices": verts.tolist(), "indices": idx.tolist(), "uvs": np.tile(unit.uvs, (len(scales), 1)).tolist(),
-            "normals": normals.reshape(-1, 3).tolist()}  # fmt: skip
+    indices, uvs, normals = unit.tiled(len(scales))
+    if not np.all(scales == scales[:, :1]):  # normals of a surface scaled unevenly
+        scaled = unit.normals[None] / scales[:, None]
+        scaled /= np.maximum(np.linalg.norm(scaled, axis=-1, keepdims=True), 1e-12)
+        normals = scaled.reshape(-1, 3).tolist()
+    return {"vertices": verts.tolist(), "indices": indices, "uvs": uvs, "normals": normals}
 
 
 SPHERE = uv_sphere()

@@ -48,6 +48,19 @@ def test_continuous_stage_loss_is_finite_and_differentiable(tmp_path):
     parts["loss"].backward()
 
 
+def test_frozen_continuous_stage_trains_the_continuous_refiner_only(tmp_path):
+    tr = make_trainer(tmp_path, "continuous", steps=3, freeze_binary=True)
+    frozen = {k: v.clone() for k, v in tr.net.state_dict().items() if not k.startswith("cont_refine.")}
+    refiner = {k: v.clone() for k, v in tr.net.cont_refine.state_dict().items()}
+    tr.run()
+    after = tr.net.state_dict()
+    for k, v in frozen.items():  # weights and batch-norm statistics of the binary network
+        assert torch.equal(after[k], v), k
+    assert any(not torch.equal(tr.net.cont_refine.state_dict()[k], v) for k, v in refiner.items())
+    with pytest.raises(ValueError, match="not 'binary'"):
+        TrainConfig(stage="binary", freeze_binary=True)
+
+
 def test_run_writes_outputs_and_resume_restores_state(tmp_path):
     tr = make_trainer(tmp_path, "binary", steps=4)
     summary = tr.run()
@@ -76,7 +89,7 @@ def test_labels():
 
 def args(**kw):
     base = dict(data="synthetic", config="tiny", out="m.pt", resume=False, init=None, seed=0, steps=10,
-                batch_size=2, lr=3e-4, val_every=5, val_limit=4, device="cpu", stage="binary")
+                batch_size=2, lr=3e-4, val_every=5, val_limit=4, device="cpu", stage="binary", freeze_binary=False)
     base.update(kw)
     return argparse.Namespace(**base)
 
@@ -91,6 +104,7 @@ def args(**kw):
     (dict(device="tpu"), "--device 'tpu'"),
     (dict(seed=-1), "--seed -1"),
     (dict(resume=True, init="x.pt"), "exclude"),
+    (dict(freeze_binary=True), "--freeze-binary applies to the continuous stage, not --stage 'binary'"),
 ])
 def test_train_flags_are_validated(kw, match):
     with pytest.raises(CliError, match=match):

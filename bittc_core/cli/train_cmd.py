@@ -36,6 +36,8 @@ def add_parser(sub) -> argparse.ArgumentParser:
     p.add_argument("--val-limit", type=int, default=64, help="validation pairs")
     p.add_argument("--device", default="auto", help="auto, cpu or cuda")
     p.add_argument("--stage", default="binary", help="flow, binary, continuous or all (default binary)")
+    p.add_argument("--freeze-binary", action="store_true",
+                   help="continuous stage: train the continuous refinement only, the binary network frozen")
     return p
 
 
@@ -58,6 +60,8 @@ def _check(args) -> None:
         raise CliError(f"--lr {args.lr}: must be in (0, 1)")
     if not args.out.endswith(".pt"):
         raise CliError(f"--out {args.out!r}: expected a file name ending in .pt")
+    if args.freeze_binary and args.stage not in ("continuous", "all"):
+        raise CliError(f"--freeze-binary applies to the continuous stage, not --stage {args.stage!r}")
     if args.resume and args.init:
         raise CliError("--resume and --init exclude each other")
     if args.init and not Path(args.init).is_file():
@@ -125,7 +129,7 @@ def run(args) -> int:
     })
     meta = {"data": args.data, "seed": args.seed}
     for stage in stages:
-        cfg = dataclasses.replace(base, stage=stage)
+        cfg = dataclasses.replace(base, stage=stage, freeze_binary=args.freeze_binary and stage == "continuous")
         trainer = Trainer(net, args.config, cfg, train_set, val_set, device, paths, meta)
         if stage == resume_stage:
             trainer.resume()

@@ -24,7 +24,6 @@ atomically: it is written under a temporary name and renamed when complete.
 
 from __future__ import annotations
 
-import io
 import json
 import os
 import shutil
@@ -34,12 +33,13 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from bittc_core.data.npz_writer import save_npz
+
 FORMAT_VERSION = 1
 SPLITS = ("train", "val", "test")
 GT_KEYS = {"eta": np.float32, "tau_s": np.float32, "depth_m": np.float32, "flow_px": np.float32, "instance": np.int16, "valid": np.bool_}
 # tau histogram bin edges [s] over actor pixels; plus "below", "above" and "inf" (receding at eta == 1)
 TAU_BIN_EDGES_S = (-10.0, -5.0, -3.0, -2.0, -1.0, -0.5, 0.0, 0.5, 1.0, 2.0, 3.0, 5.0, 10.0)
-_ZIP_DATE = (1980, 1, 1, 0, 0, 0)  # fixed zip timestamps: same content, same bytes
 
 
 def sample_dirname(index: int) -> str:
@@ -62,18 +62,6 @@ def tau_histogram(tau_s: np.ndarray, mask: np.ndarray) -> dict[str, int]:
     return dict(zip(tau_bin_labels(), values))
 
 
-def save_npz_deterministic(path: Path, arrays: dict[str, np.ndarray]) -> None:
-    """A compressed .npz (np.load reads it) whose bytes depend on the arrays only."""
-    with zipfile.ZipFile(path, "w", compression=zipfile.ZIP_DEFLATED, compresslevel=1) as zf:
-        for name, arr in arrays.items():
-            buf = io.BytesIO()
-            np.lib.format.write_array(buf, np.ascontiguousarray(arr), allow_pickle=False)
-            info = zipfile.ZipInfo(f"{name}.npy", date_time=_ZIP_DATE)
-            info.compress_type = zipfile.ZIP_DEFLATED
-            info.external_attr = 0o644 << 16
-            zf.writestr(info, buf.getvalue(), compress_type=zipfile.ZIP_DEFLATED, compresslevel=1)
-
-
 def write_sample(split_dir: Path, index: int, clip, extra_meta: dict) -> None:
     """Write one sample folder atomically (temporary folder, then rename)."""
     final = split_dir / sample_dirname(index)
@@ -87,7 +75,7 @@ def write_sample(split_dir: Path, index: int, clip, extra_meta: dict) -> None:
             raise OSError(f"PNG encoding failed for sample {index}")
         (tmp / f"frame_{k}.png").write_bytes(png.tobytes())
     arrays = {key: np.stack([getattr(g, key) for g in clip.gts]).astype(dt) for key, dt in GT_KEYS.items()}
-    save_npz_deterministic(tmp / "gt.npz", arrays)
+    save_npz(tmp / "gt.npz", arrays)
     last = clip.gts[-1]
     meta = {**clip.meta, **extra_meta, "format_version": FORMAT_VERSION, "n_frames": len(clip.images),
             "tau_histogram_actor_px": tau_histogram(last.tau_s, last.valid & (last.instance > 0))}  # fmt: skip

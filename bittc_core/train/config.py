@@ -25,6 +25,10 @@ class TrainConfig:
     flow_weight: float = 0.2
     cont_bce_weight: float = 0.1  # paper: BCE on the stacked maps 0.1, SmoothL1 on AUC 0.9
     cont_sl1_weight: float = 0.9
+    # continuous stage: train ContRefineNet only; the binary network (extractor, SegNet,
+    # SegRefineNet) is frozen with its batch-norm statistics, so the geofences keep the
+    # binary stage's accuracy (a small model fine-tuned end to end trades them for MiD)
+    freeze_binary: bool = False
     val_every: int = 250  # steps between validations (and checkpoints)
     val_limit: int = 64  # validation pairs
     log_every: int = 10  # steps between CSV rows
@@ -38,5 +42,7 @@ class TrainConfig:
                      "val_every", "val_limit", "log_every"):
             if getattr(self, name) <= 0:
                 raise ValueError(f"{name}={getattr(self, name)}: must be > 0")
+        if self.freeze_binary and self.stage != "continuous":
+            raise ValueError(f"freeze_binary applies to the continuous stage, not {self.stage!r}")
         if self.lr <= 0 or self.clip_grad_norm <= 0:
             raise ValueError("lr and clip_grad_norm must be > 0")

@@ -3,7 +3,8 @@
 Stages: ``flow``: binary-flow pre-training, TTC head unsupervised; ``binary``: binary
 TTC (several eta thresholds per pair) + binary flow auxiliary, weights 0.8 / 0.2;
 ``continuous``: the stacked TTC volume, BCE on its maps (0.1) + SmoothL1 on the AUC and
-refined log eta (0.9), still with the flow auxiliary (0.8 / 0.2).
+refined log eta (0.9), still with the flow auxiliary (0.8 / 0.2); with
+``freeze_binary`` only ContRefineNet learns (SmoothL1 on the refined log eta).
 AdamW, linear warm-up then cosine decay, gradient clipping; validation every
 ``val_every`` steps keeps the best checkpoint by val mIoU at ``paths.best``; a
 resumable checkpoint (optimizer, step, RNG states) goes to ``paths.last``; a CSV row
@@ -78,9 +79,23 @@ class Trainer:
         self.loader = DataLoader(train_set, batch_size=cfg.batch_size, shuffle=True,
                                  drop_last=True, num_workers=cfg.num_workers,
                                  generator=self.loader_gen)
-        self.opt = torch.optim.AdamW(net.parameters(), lr=cfg.lr, weight_decay=cfg.weight_decay)
+        if cfg.freeze_binary:
+            for module in self.frozen_modules():
+                module.requires_grad_(False)
+        self.opt = torch.optim.AdamW([q for q in net.parameters() if q.requires_grad], lr=cfg.lr,
+                                     weight_decay=cfg.weight_decay)
         self.step = 0
         self.best = -math.inf
+
+    def frozen_modules(self) -> list[torch.nn.Module]:
+        net = self.net
+        return [net.features, net.segnet, net.refine] if self.cfg.freeze_binary else []
+
+    def _train_mode(self) -> None:
+        """Training mode, except frozen modules (their batch-norm statistics stay put)."""
+        self.net.train()
+        for module in self.frozen_modules():
+            module.eval()
 
     # -- schedule and losses ----------------------------------------------------------
     def lr_at(self, step: int) -> float:
@@ -97,9 +112,12 @@ class Trainer:
         feats = net.extract(torch.cat((batch["image_prev"], batch["image_latest"])))
         ctx = net.prepare_reference(feats[b:], batch["image_latest"])
         mask = valid_mask(batch)
-        shifts = sample_shifts_px(b, c.shifts_per_pair, mc.max_shift_px, self.gen).to(self.device)
-        flow_logits = net.classify_shift(ctx, feats[:b], shifts)
-        out = {"flow": masked_bce(flow_logits, shift_labels(batch["flow_px"], shifts), mask[:, None, None])}
+        if c.freeze_binary:  # nothing the flow heads feed can learn
+            out = {"flow": torch.zeros((), device=self.device)}
+        else:
+            shifts = sample_shifts_px(b, c.shifts_per_pair, mc.max_shift_px, self.gen).to(self.device)
+            flow_logits = net.classify_shift(ctx, feats[:b], shifts)
+            out = {"flow": masked_bce(flow_logits, shift_labels(batch["flow_px"], shifts), mask[:, None, None])}
         if c.stage == "flow":
             out["loss"] = out["flow"]
             return out
@@ -122,6 +140,9 @@ class Trainer:
                          + masked_smooth_l1(cont.log_eta, target, m, unit))
             out["cont"] = sl1
             out["ttc"] = c.cont_bce_weight * bce + c.cont_sl1_weight * sl1
+            if c.freeze_binary:  # only the refined term has gradients; log the same parts
+                out["loss"] = c.cont_sl1_weight * masked_smooth_l1(cont.log_eta, target, m, unit)
+                return out
         out["loss"] = c.ttc_weight * out["ttc"] + c.flow_weight * out["flow"]
         return out
 
@@ -165,7 +186,7 @@ class Trainer:
 
     def run(self) -> dict:
         c = self.cfg
-        self.net.train()
+        self._train_mode()
         batches = _forever(self.loader, epoch=self.step // max(len(self.loader), 1))
         bar = tqdm(total=c.steps, initial=self.step, desc=f"train {c.stage}", mininterval=1.0)
         last_val: dict = {}
@@ -178,7 +199,7 @@ class Trainer:
             parts = self.losses(batch)
             self.opt.zero_grad(set_to_none=True)
             parts["loss"].backward()
-            grad_norm = float(torch.nn.utils.clip_grad_norm_(self.net.parameters(), c.clip_grad_norm))
+            grad_norm = float(torch.nn.utils.clip_grad_norm_(self.opt.param_groups[0]["params"], c.clip_grad_norm))
             self.opt.step()
             self.step += 1
             bar.update(1)
@@ -193,6 +214,7 @@ class Trainer:
             if self.step % c.val_every == 0 or self.step == c.steps:
                 last_val = validate(self.net, self.val_set, stage=c.stage, limit=c.val_limit,
                                     batch_size=c.batch_size, device=self.device)
+                self._train_mode()
                 row = dict(row or {"step": self.step, "stage": c.stage}, **{k: f"{v:.5f}" for k, v in last_val.items()})
                 if last_val["val_miou"] > self.best:
                     self.best = last_val["val_miou"]
