@@ -10,6 +10,7 @@ from bittc_core.data.synthetic import SyntheticConfig, SyntheticPairs
 from bittc_core.errors import CliError
 from bittc_core.model import BinaryTTCNet, get_config
 from bittc_core.train import RunPaths, TrainConfig, Trainer
+from bittc_core.train.losses import masked_bce
 from bittc_core.train.targets import eta_labels, shift_labels
 
 SMALL = SyntheticConfig(height_px=48, width_px=96, patch_half_size_px=(6.0, 20.0), max_translation_px=6.0)
@@ -24,9 +25,9 @@ def make_trainer(tmp_path, stage, steps=30, **kw):
                    torch.device("cpu"), RunPaths.from_out(tmp_path / "m.pt"))
 
 
-@pytest.mark.parametrize("stage", ["flow", "binary"])
-def test_a_few_steps_lower_the_loss(tmp_path, stage):
-    tr = make_trainer(tmp_path, stage)
+@pytest.mark.parametrize("stage, actor_weight", [("flow", 1.0), ("binary", 1.0), ("binary", 3.0)])
+def test_a_few_steps_lower_the_loss(tmp_path, stage, actor_weight):
+    tr = make_trainer(tmp_path, stage, actor_weight=actor_weight)
     batch = next(iter(tr.loader))  # one fixed batch: the loss must go down on it
     losses = []
     for step in range(30):
@@ -78,6 +79,17 @@ def test_run_writes_outputs_and_resume_restores_state(tmp_path):
         wrong.resume()
 
 
+def test_weighted_bce():
+    logits = torch.tensor([[[2.0, -1.0, 0.5]]])
+    labels = torch.tensor([[[1.0, 1.0, 0.0]]])
+    mask = torch.tensor([[[True, True, False]]])
+    plain = masked_bce(logits, labels, mask)
+    assert torch.allclose(masked_bce(logits, labels, mask, torch.full_like(logits, 3.0)), plain)
+    per = torch.nn.functional.binary_cross_entropy_with_logits(logits, labels, reduction="none")[0, 0]
+    weighted = masked_bce(logits, labels, mask, torch.tensor([[[1.0, 4.0, 9.0]]]))
+    assert torch.allclose(weighted, (per[0] + 4 * per[1]) / 5)  # the masked pixel's weight is unused
+
+
 def test_labels():
     eta = torch.tensor([[[0.5, 0.9, 1.0, 1.2, -1.0]]])
     lab = eta_labels(eta, torch.tensor([[0.9, 1.1]]))
@@ -89,7 +101,8 @@ def test_labels():
 
 def args(**kw):
     base = dict(data="synthetic", config="tiny", out="m.pt", resume=False, init=None, seed=0, steps=10,
-                batch_size=2, lr=3e-4, val_every=5, val_limit=4, device="cpu", stage="binary", freeze_binary=False)
+                batch_size=2, lr=3e-4, val_every=5, val_limit=4, device="cpu", stage="binary", freeze_binary=False,
+                actor_weight=1.0)
     base.update(kw)
     return argparse.Namespace(**base)
 
@@ -104,6 +117,7 @@ def args(**kw):
     (dict(device="tpu"), "--device 'tpu'"),
     (dict(seed=-1), "--seed -1"),
     (dict(resume=True, init="x.pt"), "exclude"),
+    (dict(actor_weight=0.0), "--actor-weight 0.0"),
     (dict(freeze_binary=True), "--freeze-binary applies to the continuous stage, not --stage 'binary'"),
 ])
 def test_train_flags_are_validated(kw, match):

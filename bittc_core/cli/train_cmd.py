@@ -36,6 +36,8 @@ def add_parser(sub) -> argparse.ArgumentParser:
     p.add_argument("--val-limit", type=int, default=64, help="validation pairs")
     p.add_argument("--device", default="auto", help="auto, cpu or cuda")
     p.add_argument("--stage", default="binary", help="flow, binary, continuous or all (default binary)")
+    p.add_argument("--actor-weight", type=float, default=1.0,
+                   help="binary stage: loss weight of moving-actor pixels, static pixels 1 (default 1)")
     p.add_argument("--freeze-binary", action="store_true",
                    help="continuous stage: train the continuous refinement only, the binary network frozen")
     return p
@@ -60,6 +62,8 @@ def _check(args) -> None:
         raise CliError(f"--lr {args.lr}: must be in (0, 1)")
     if not args.out.endswith(".pt"):
         raise CliError(f"--out {args.out!r}: expected a file name ending in .pt")
+    if not args.actor_weight > 0:
+        raise CliError(f"--actor-weight {args.actor_weight}: must be > 0")
     if args.freeze_binary and args.stage not in ("continuous", "all"):
         raise CliError(f"--freeze-binary applies to the continuous stage, not --stage {args.stage!r}")
     if args.resume and args.init:
@@ -119,7 +123,8 @@ def run(args) -> int:
         stages = stages[stages.index(resume_stage):]
 
     base = TrainConfig(steps=args.steps, batch_size=args.batch_size, lr=args.lr,
-                       val_every=args.val_every, val_limit=args.val_limit, seed=args.seed)
+                       val_every=args.val_every, val_limit=args.val_limit, seed=args.seed,
+                       actor_weight=args.actor_weight)
     write_yaml_atomic(paths.config, {
         "argv": list(sys.argv),
         "data": args.data, "device": str(device), "stages": stages,

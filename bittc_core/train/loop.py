@@ -1,7 +1,8 @@
 """The training loop of one stage (paper Sec. 4.4 and Supp. B).
 
 Stages: ``flow``: binary-flow pre-training, TTC head unsupervised; ``binary``: binary
-TTC (several eta thresholds per pair) + binary flow auxiliary, weights 0.8 / 0.2;
+TTC (several eta thresholds per pair, moving-actor pixels weighted ``actor_weight``) +
+binary flow auxiliary, weights 0.8 / 0.2;
 ``continuous``: the stacked TTC volume, BCE on its maps (0.1) + SmoothL1 on the AUC and
 refined log eta (0.9), still with the flow auxiliary (0.8 / 0.2); with
 ``freeze_binary`` only ContRefineNet learns (SmoothL1 on the refined log eta).
@@ -126,7 +127,10 @@ class Trainer:
             thr = sample_eta(b, c.thresholds_per_pair, c.train_tau_min_s, c.train_eta_max,
                              mc.frame_dt_s, self.gen).to(self.device)
             logits = net.classify_eta(ctx, feats[:b], thr)
-            out["ttc"] = masked_bce(logits, eta_labels(eta, thr), mask[:, None])
+            weight = None
+            if c.actor_weight != 1.0:
+                weight = torch.where(batch["instance"] > 0, c.actor_weight, 1.0)[:, None]
+            out["ttc"] = masked_bce(logits, eta_labels(eta, thr), mask[:, None], weight)
         else:
             cont = net.continuous(ctx, feats[:b])
             levels = cont.levels.expand(b, -1)

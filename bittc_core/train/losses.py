@@ -6,12 +6,18 @@ import torch
 import torch.nn.functional as F
 
 
-def masked_bce(logits: torch.Tensor, labels: torch.Tensor, mask: torch.Tensor) -> torch.Tensor:
-    """Mean BCE over pixels where ``mask`` (broadcast to the logits' shape) is true."""
+def masked_bce(logits: torch.Tensor, labels: torch.Tensor, mask: torch.Tensor,
+               weight: torch.Tensor | None = None) -> torch.Tensor:
+    """Mean BCE over pixels where ``mask`` (broadcast to the logits' shape) is true;
+    with ``weight`` (broadcast likewise) the weighted mean."""
     mask = mask.expand_as(logits)
     if not mask.any():
         return logits.sum() * 0.0
-    return F.binary_cross_entropy_with_logits(logits[mask], labels[mask])
+    if weight is None:
+        return F.binary_cross_entropy_with_logits(logits[mask], labels[mask])
+    w = weight.expand_as(logits)[mask]
+    per_px = F.binary_cross_entropy_with_logits(logits[mask], labels[mask], reduction="none")
+    return (per_px * w).sum() / w.sum()
 
 
 def masked_smooth_l1(pred: torch.Tensor, target: torch.Tensor, mask: torch.Tensor,
