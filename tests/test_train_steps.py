@@ -53,7 +53,8 @@ def test_frozen_continuous_stage_trains_the_continuous_refiner_only(tmp_path):
     tr = make_trainer(tmp_path, "continuous", steps=3, freeze_binary=True)
     frozen = {k: v.clone() for k, v in tr.net.state_dict().items() if not k.startswith("cont_refine.")}
     refiner = {k: v.clone() for k, v in tr.net.cont_refine.state_dict().items()}
-    tr.run()
+    summary = tr.run()
+    assert summary["best_val_mid"] == pytest.approx(summary["val_mid"])  # one validation, kept by MiD
     after = tr.net.state_dict()
     for k, v in frozen.items():  # weights and batch-norm statistics of the binary network
         assert torch.equal(after[k], v), k

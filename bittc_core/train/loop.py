@@ -7,7 +7,8 @@ binary flow auxiliary, weights 0.8 / 0.2;
 refined log eta (0.9), still with the flow auxiliary (0.8 / 0.2); with
 ``freeze_binary`` only ContRefineNet learns (SmoothL1 on the refined log eta).
 AdamW, linear warm-up then cosine decay, gradient clipping; validation every
-``val_every`` steps keeps the best checkpoint by val mIoU at ``paths.best``; a
+``val_every`` steps keeps the best checkpoint by val mIoU (by val MiD with
+``freeze_binary``) at ``paths.best``; a
 resumable checkpoint (optimizer, step, RNG states) goes to ``paths.last``; a CSV row
 every ``log_every`` steps to ``paths.csv``.
 """
@@ -97,6 +98,15 @@ class Trainer:
         self.net.train()
         for module in self.frozen_modules():
             module.eval()
+
+    @property
+    def criterion(self) -> str:
+        """What picks the best checkpoint: val mIoU; val MiD when the binary maps are frozen."""
+        return "val_mid" if self.cfg.freeze_binary else "val_miou"
+
+    def score(self, val: dict) -> float:
+        """Higher is better."""
+        return -val["val_mid"] if self.cfg.freeze_binary else val["val_miou"]
 
     # -- schedule and losses ----------------------------------------------------------
     def lr_at(self, step: int) -> float:
@@ -220,12 +230,14 @@ class Trainer:
                                     batch_size=c.batch_size, device=self.device)
                 self._train_mode()
                 row = dict(row or {"step": self.step, "stage": c.stage}, **{k: f"{v:.5f}" for k, v in last_val.items()})
-                if last_val["val_miou"] > self.best:
-                    self.best = last_val["val_miou"]
+                score = self.score(last_val)
+                if score > self.best:
+                    self.best = score
                     save_checkpoint(self.paths.best, make_payload(self.net, self.config_name,
                                                                   self._meta(last_val)))
                 self.save_last()
             if row is not None:
                 self._log(row)
         bar.close()
-        return {"stage": c.stage, "steps": self.step, "best_val_miou": self.best, **last_val}
+        best = -self.best if c.freeze_binary else self.best
+        return {"stage": c.stage, "steps": self.step, f"best_{self.criterion}": best, **last_val}
