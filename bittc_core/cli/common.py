@@ -34,6 +34,17 @@ def non_negative_int(name: str, value: int, upper: int | None = None) -> int:
 
 
 MAX_SEED = 2**32 - 1
+DEVICES = ("auto", "cpu", "cuda")
+
+
+def add_device_flag(parser) -> None:
+    parser.add_argument("--device", default="auto", help="auto, cpu or cuda")
+
+
+def check_device(value: str) -> str:
+    if value not in DEVICES:
+        raise CliError(f"--device {value!r}: expected auto, cpu or cuda")
+    return value
 
 
 def writable_dir(path: str) -> Path:

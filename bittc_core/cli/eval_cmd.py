@@ -15,6 +15,7 @@ import tempfile
 import time
 from pathlib import Path
 
+from bittc_core.cli.common import add_device_flag, check_device
 from bittc_core.errors import CliError
 
 METHODS = ("bittc", "flow", "oracle")
@@ -30,7 +31,7 @@ def add_parser(sub) -> argparse.ArgumentParser:
     p.add_argument("--out", default=None, help="JSON file to write")
     p.add_argument("--split", default="test", help="train, val or test (default test)")
     p.add_argument("--limit", type=int, default=None, help="evaluate the first N pairs only")
-    p.add_argument("--device", default="auto", help="auto, cpu or cuda")
+    add_device_flag(p)
     return p
 
 
@@ -43,8 +44,7 @@ def _check(args) -> Path:
         raise CliError(f"--limit {args.limit}: must be > 0")
     if args.weights is not None and args.method != "bittc":
         raise CliError(f"--weights applies to --method bittc only, not {args.method!r}")
-    if args.device not in ("auto", "cpu", "cuda"):
-        raise CliError(f"--device {args.device!r}: expected auto, cpu or cuda")
+    check_device(args.device)
     out = Path(args.out or f"eval_{args.method}_{args.split}.json")
     if out.suffix != ".json":
         raise CliError(f"--out {str(out)!r}: expected a .json file")

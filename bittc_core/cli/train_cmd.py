@@ -14,10 +14,10 @@ import sys
 import tempfile
 from pathlib import Path
 
+from bittc_core.cli.common import add_device_flag, check_device
 from bittc_core.errors import CliError
 
 STAGE_CHOICES = ("flow", "binary", "continuous", "all")
-DEVICES = ("auto", "cpu", "cuda")
 
 
 def add_parser(sub) -> argparse.ArgumentParser:
@@ -34,7 +34,7 @@ def add_parser(sub) -> argparse.ArgumentParser:
     p.add_argument("--lr", type=float, default=3e-4, help="peak learning rate (default 3e-4)")
     p.add_argument("--val-every", type=int, default=250, help="steps between validations")
     p.add_argument("--val-limit", type=int, default=64, help="validation pairs")
-    p.add_argument("--device", default="auto", help="auto, cpu or cuda")
+    add_device_flag(p)
     p.add_argument("--stage", default="binary", help="flow, binary, continuous or all (default binary)")
     p.add_argument("--actor-weight", type=float, default=1.0,
                    help="binary stage: loss weight of moving-actor pixels, static pixels 1 (default 1)")
@@ -50,8 +50,7 @@ def _check(args) -> None:
         raise CliError(f"--config {args.config!r}: expected one of {sorted(CONFIGS)}")
     if args.stage not in STAGE_CHOICES:
         raise CliError(f"--stage {args.stage!r}: expected one of {STAGE_CHOICES}")
-    if args.device not in DEVICES:
-        raise CliError(f"--device {args.device!r}: expected one of {DEVICES}")
+    check_device(args.device)
     for flag, value in (("--steps", args.steps), ("--batch-size", args.batch_size),
                         ("--val-every", args.val_every), ("--val-limit", args.val_limit)):
         if value <= 0:

@@ -41,9 +41,9 @@ def save_npz(path: str | Path, arrays: dict[str, np.ndarray]) -> None:
     central = bytearray()
     for name, arr in arrays.items():
         raw = npy_bytes(arr)
-        packed = isal_zlib.compress(raw, DEFLATE_LEVEL, wbits=-15)  # raw deflate stream
         if len(raw) >= 0xFFFFFFFF:
             raise ValueError(f"array {name!r}: {len(raw)} bytes needs ZIP64, not supported")
+        packed = isal_zlib.compress(raw, DEFLATE_LEVEL, wbits=-15)  # raw deflate stream
         fname = f"{name}.npy".encode()
         crc = zlib.crc32(raw)
         offset = len(out)

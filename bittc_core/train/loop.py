@@ -81,9 +81,8 @@ class Trainer:
         self.loader = DataLoader(train_set, batch_size=cfg.batch_size, shuffle=True,
                                  drop_last=True, num_workers=cfg.num_workers,
                                  generator=self.loader_gen)
-        if cfg.freeze_binary:
-            for module in self.frozen_modules():
-                module.requires_grad_(False)
+        for module in self.frozen_modules():
+            module.requires_grad_(False)
         self.opt = torch.optim.AdamW([q for q in net.parameters() if q.requires_grad], lr=cfg.lr,
                                      weight_decay=cfg.weight_decay)
         self.step = 0
@@ -150,12 +149,12 @@ class Trainer:
             target = torch.log(eta.clamp(mc.cont_eta_min, mc.cont_eta_max))[:, None]
             unit = math.log(mc.cont_eta_max / mc.cont_eta_min) / mc.cont_levels  # ~ one bin
             m = mask[:, None] & (eta[:, None] > 0)
-            sl1 = 0.5 * (masked_smooth_l1(torch.log(cont.eta_auc), target, m, unit)
-                         + masked_smooth_l1(cont.log_eta, target, m, unit))
+            refined = masked_smooth_l1(cont.log_eta, target, m, unit)
+            sl1 = 0.5 * (masked_smooth_l1(torch.log(cont.eta_auc), target, m, unit) + refined)
             out["cont"] = sl1
             out["ttc"] = c.cont_bce_weight * bce + c.cont_sl1_weight * sl1
             if c.freeze_binary:  # only the refined term has gradients; log the same parts
-                out["loss"] = c.cont_sl1_weight * masked_smooth_l1(cont.log_eta, target, m, unit)
+                out["loss"] = c.cont_sl1_weight * refined
                 return out
         out["loss"] = c.ttc_weight * out["ttc"] + c.flow_weight * out["flow"]
         return out
