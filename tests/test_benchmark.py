@@ -1,0 +1,33 @@
+"""The latency benchmark's arithmetic and protocol (timings themselves are never asserted)."""
+
+from __future__ import annotations
+
+import pytest
+
+from bittc_core.benchmark import BenchSettings, _interleaved_median_ms, extra_threshold_ratios
+
+
+def test_extra_threshold_ratios_of_a_linear_cost():
+    # t_K = 10 ms + 2.5 ms per extra threshold -> every ratio and the slope are 0.25
+    ratios, slope = extra_threshold_ratios({k: 10.0 + 2.5 * (k - 1) for k in (1, 2, 4, 8, 16, 24)})
+    assert set(ratios) == {2, 4, 8, 16, 24}
+    assert all(r == pytest.approx(0.25) for r in ratios.values())
+    assert slope == pytest.approx(0.25)
+
+
+def test_extra_threshold_ratios_see_a_superlinear_cost():
+    ratios, _ = extra_threshold_ratios({1: 10.0, 2: 12.0, 24: 10.0 + 23 * 4.0})
+    assert ratios[2] == pytest.approx(0.2) and ratios[24] == pytest.approx(0.4)
+
+
+def test_interleaved_rounds_call_every_setting_on_the_same_pairs_in_turn():
+    seen = []
+    calls = {name: (lambda a, b, n=name: seen.append((n, a, b))) for name in ("x", "y")}
+    ms = _interleaved_median_ms(calls, [0, 1, 2, 3], warmup=1)
+    assert seen == [("x", 0, 1), ("y", 0, 1), ("x", 1, 2), ("y", 1, 2), ("x", 2, 3), ("y", 2, 3)]
+    assert set(ms) == {"x", "y"} and all(v >= 0 for v in ms.values())
+
+
+def test_settings_need_one_threshold():
+    with pytest.raises(ValueError, match="K = 1"):
+        BenchSettings(thresholds=(2, 4))
