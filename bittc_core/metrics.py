@@ -15,6 +15,10 @@ eta_i = tau_i / (tau_i + dt_s).
 * actor_iou: like miou but only over valid pixels of moving actors (instance > 0), at
   tau = 1 and 2 s, with intersections and unions pooled over the data set (actors are
   often absent from an image) and averaged over the two classes.
+* breakdown (where the errors are): the mIoU per threshold; the (image, threshold)
+  pairs of the mIoU grouped by the share of valid pixels inside the geofence
+  (``INSIDE_SHARE_EDGES``), with their mean two-class IoU and mean inside-class IoU; the
+  MiD of actor pixels and of static pixels apart.
 """
 
 from __future__ import annotations
@@ -31,6 +35,8 @@ ERROR_RATE_TAUS_S = (1.0, 2.0, 5.0)
 ACTOR_TAUS_S = (1.0, 2.0)
 MID_MAX_LOG_ETA = float(np.log(2.0))
 MID_SCALE = 1e4
+INSIDE_SHARE_EDGES = (0.05, 0.2)  # inside-share groups: 0, (0, 5 %), [5, 20 %), [20, 100 %]
+INSIDE_SHARE_LABELS = ("0", "0-5%", "5-20%", "20-100%")
 
 
 def miou_thresholds_s(dt_s: float, levels: int = MIOU_LEVELS) -> np.ndarray:
@@ -59,6 +65,14 @@ def two_class_iou(counts: np.ndarray) -> float:
     return float(np.mean(ious)) if ious else float("nan")
 
 
+def inside_share_group(inside_px: int, valid_px: int) -> str:
+    """Label of the inside-share group of one (image, threshold) pair."""
+    if inside_px == 0:
+        return INSIDE_SHARE_LABELS[0]
+    share = inside_px / max(valid_px, 1)
+    return INSIDE_SHARE_LABELS[1 + int(np.searchsorted(INSIDE_SHARE_EDGES, share, side="right"))]
+
+
 def mid_terms(eta_hat: np.ndarray, eta: np.ndarray, valid: np.ndarray) -> tuple[float, int]:
     """(sum of |log eta_hat - log eta|, pixel count) over the MiD pixels."""
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -80,9 +94,14 @@ class MetricAccumulator:
     _errors: dict = field(default_factory=dict)
     _actor: dict = field(default_factory=dict)
     _latency_ms: list = field(default_factory=list)
+    _iou_by_threshold: list = field(default_factory=list)  # per image: K ious (nan: skipped)
+    _by_share: dict = field(default_factory=dict)  # label -> [[two-class iou], [inside iou]]
+    _mid_parts: dict = field(default_factory=dict)  # "actor" / "static" -> [sum, count]
 
     def __post_init__(self) -> None:
         self.miou_thresholds_s = miou_thresholds_s(self.dt_s)
+        self._by_share = {label: [[], []] for label in INSIDE_SHARE_LABELS}
+        self._mid_parts = {"actor": [0.0, 0], "static": [0.0, 0]}
         self._errors = {t: [0, 0] for t in ERROR_RATE_TAUS_S}
         self._actor = {t: np.zeros((2, 2), np.int64) for t in ACTOR_TAUS_S}
 
@@ -98,8 +117,18 @@ class MetricAccumulator:
             raise ValueError(f"expected {len(self.thresholds_s)} maps, got {prob.shape[0]}")
         pred = prob > 0.5
         n = len(self.miou_thresholds_s)
-        ious = [two_class_iou(class_counts(pred[i], inside_geofence(eta, tau_to_eta(t, self.dt_s)), valid))
-                for i, t in enumerate(self.miou_thresholds_s)]
+        valid_px = int(valid.sum())
+        ious = []
+        for i, t in enumerate(self.miou_thresholds_s):
+            truth = inside_geofence(eta, tau_to_eta(t, self.dt_s))
+            counts = class_counts(pred[i], truth, valid)
+            ious.append(two_class_iou(counts))
+            if np.isfinite(ious[-1]):
+                group = self._by_share[inside_share_group(int(np.sum(truth & valid)), valid_px)]
+                group[0].append(ious[-1])
+                if counts[0, 1] > 0:
+                    group[1].append(counts[0, 0] / counts[0, 1])
+        self._iou_by_threshold.append(ious)
         ious = [x for x in ious if np.isfinite(x)]
         if ious:
             self._ious.append(float(np.mean(ious)))
@@ -114,6 +143,10 @@ class MetricAccumulator:
             s, c = mid_terms(eta_hat, eta, valid)
             self._mid_sum += s
             self._mid_count += c
+            for part, mask in (("actor", actors), ("static", valid & (instance == 0))):
+                s, c = mid_terms(eta_hat, eta, mask)
+                self._mid_parts[part][0] += s
+                self._mid_parts[part][1] += c
         if latency_ms is not None:
             self._latency_ms.append(latency_ms)
 
@@ -126,4 +159,20 @@ class MetricAccumulator:
             "actor_iou": {f"{t:g}": two_class_iou(c) for t, c in self._actor.items()},
             "latency_ms": float(np.mean(self._latency_ms)) if self._latency_ms else nan,
             "images": len(self._ious),
+            "breakdown": self._breakdown(),
         }
+
+    def _breakdown(self) -> dict:
+        nan = float("nan")
+
+        def mean(values) -> float:
+            return float(np.mean(values)) if len(values) else nan
+
+        per_threshold = np.array(self._iou_by_threshold, dtype=np.float64).reshape(-1, len(self.miou_thresholds_s))
+        by_threshold = {f"{t:.4g}": mean(col[np.isfinite(col)]) for t, col in zip(self.miou_thresholds_s, per_threshold.T)}
+        # inside_iou: over the pairs where prediction or truth has inside pixels
+        # (in group "0" those are the pairs with false inside pixels, all scoring 0)
+        by_share = {label: {"pairs": len(g[0]), "miou": mean(g[0]), "inside_iou": mean(g[1]),
+                            "pairs_with_inside_pixels": len(g[1])} for label, g in self._by_share.items()}
+        mid = {f"mid_{part}": (s / c * MID_SCALE if c else nan) for part, (s, c) in self._mid_parts.items()}
+        return {"miou_by_threshold_s": by_threshold, "by_inside_share": by_share, **mid}

@@ -60,6 +60,32 @@ def test_accumulator_perfect_and_inverted_predictions():
     assert r["mid"] == pytest.approx(np.log(1.01) * 1e4)
 
 
+def test_breakdown_groups_pairs_by_inside_share():
+    dt = 0.1
+    acc = MetricAccumulator(dt_s=dt)
+    n = len(acc.miou_thresholds_s)
+    # image 1: nothing inside any geofence, one false inside pixel in every map
+    eta = np.full((10, 10), 0.99)
+    prob = np.zeros((len(acc.thresholds_s), 10, 10), np.float32)
+    prob[:, 0, 0] = 1.0
+    valid, static = np.ones(eta.shape, bool), np.zeros(eta.shape, np.int64)
+    acc.add(prob, eta * np.exp(0.01), eta, valid, static)
+    # image 2: a 3-pixel actor at 0.15 s (3 % of the pixels), predicted exactly
+    eta2 = np.full((10, 10), 0.99)
+    eta2[0, :3] = tau_to_eta(0.15, dt)
+    actor = np.zeros(eta.shape, np.int64)
+    actor[0, :3] = 1
+    truth = np.stack([(eta2 <= tau_to_eta(t, dt)) for t in acc.thresholds_s]).astype(np.float32)
+    acc.add(truth, eta2, eta2, valid, actor)
+    b = acc.result()["breakdown"]
+    assert b["by_inside_share"]["0"] == {"pairs": n, "miou": pytest.approx((0 + 99 / 100) / 2),
+                                         "inside_iou": 0.0, "pairs_with_inside_pixels": n}
+    assert b["by_inside_share"]["0-5%"] == {"pairs": n, "miou": 1.0, "inside_iou": 1.0, "pairs_with_inside_pixels": n}
+    assert b["by_inside_share"]["20-100%"]["pairs"] == 0 and math.isnan(b["by_inside_share"]["20-100%"]["miou"])
+    assert all(v == pytest.approx((0.495 + 1.0) / 2) for v in b["miou_by_threshold_s"].values())
+    assert b["mid_actor"] == pytest.approx(0.0) and b["mid_static"] == pytest.approx(0.01 * 1e4 * 100 / 197)
+
+
 def test_ttc_conventions():
     assert eta_to_tau(0.5, 0.1) == pytest.approx(0.1)
     assert eta_to_tau(1.0, 0.1) == np.inf

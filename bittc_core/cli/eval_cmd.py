@@ -1,7 +1,8 @@
 """`bittc eval --data DIR --method {bittc,flow,oracle}`: metrics of an estimator.
 
 Prints a table and writes a JSON file (--out, default eval_<method>_<split>.json)
-with miou, mid, error_rate, actor_iou, latency_ms (see ``bittc_core.metrics``).
+with miou, mid, error_rate, actor_iou, latency_ms and a breakdown of where the
+errors are (see ``bittc_core.metrics``).
 Latency: wall time per pair of the estimator calls (geofence for all metric
 thresholds + continuous), frames fed in dataset order.
 """
@@ -86,6 +87,14 @@ def format_table(r: dict) -> str:
     lines += [f"{'error rate tau=' + k + ' s':<22} {v:>10.4f}" for k, v in r["error_rate"].items()]
     lines += [f"{'actor IoU tau=' + k + ' s':<22} {v:>10.4f}" for k, v in r["actor_iou"].items()]
     lines.append(f"{'latency ms/pair':<22} {r['latency_ms']:>10.2f}")
+    b = r.get("breakdown")
+    if b:
+        lines.append(f"{'MiD actor / static':<22} {b['mid_actor']:>10.1f} / {b['mid_static']:.1f}")
+        lines.append("mIoU by threshold [s]: " + ", ".join(f"{t} {v:.3f}" for t, v in b["miou_by_threshold_s"].items()))
+        lines.append("mIoU pairs by share of pixels inside the geofence:")
+        for label, g in b["by_inside_share"].items():
+            lines.append(f"  {label:>8}: {g['pairs']:>6} pairs, mIoU {g['miou']:.3f}, inside-class IoU "
+                         f"{g['inside_iou']:.3f} over {g['pairs_with_inside_pixels']} pairs")
     return "\n".join(lines)
 
 
