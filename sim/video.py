@@ -24,11 +24,18 @@ def ttc_overlay(image_rgb: np.ndarray, tau_s: np.ndarray, valid: np.ndarray, ins
     return out.astype(np.uint8)
 
 
+# one-pixel offsets of the black outline drawn under the white HUD text: a thicker
+# stroke would not do, OpenCV widens each glyph's advance with the thickness, so a
+# thick outline drifts right of the thin text along the line
+_OUTLINE_OFFSETS_PX = [(dx, dy) for dx in (-1, 0, 1) for dy in (-1, 0, 1) if dx or dy]
+
+
 def hud(image_rgb: np.ndarray, lines: list[str], alert: bool) -> np.ndarray:
     img = np.ascontiguousarray(image_rgb)
     y = 16
     for line in lines:
-        cv2.putText(img, line, (6, y), cv2.FONT_HERSHEY_SIMPLEX, 0.45, (0, 0, 0), 3, cv2.LINE_AA)
+        for dx, dy in _OUTLINE_OFFSETS_PX:
+            cv2.putText(img, line, (6 + dx, y + dy), cv2.FONT_HERSHEY_SIMPLEX, 0.45, (0, 0, 0), 1, cv2.LINE_AA)
         cv2.putText(img, line, (6, y), cv2.FONT_HERSHEY_SIMPLEX, 0.45, (255, 255, 255), 1, cv2.LINE_AA)
         y += 16
     if alert:
