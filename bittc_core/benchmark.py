@@ -9,7 +9,7 @@ relative to the one-threshold cost, (t_K - t_1) / ((K - 1) t_1), per K and from 
 least-squares slope of t_K over K.
 
 Interleaved rounds: every setting has its own estimator (its own frame cache, the
-network shared) and round j times call j of every setting in turn, so a slow spell of
+network shared) and round j times call j of every setting in turn (the order rotated each round), so a slow spell of
 the machine (other processes, a virtual machine's stolen time) lands on all settings
 alike instead of on whichever setting was being timed then; ratios between settings
 are what this protocol keeps steady.
@@ -39,8 +39,13 @@ class BenchSettings:
     seed: int = 0
 
     def __post_init__(self) -> None:
-        if 1 not in self.thresholds or min(self.thresholds) < 1:
-            raise ValueError(f"BenchSettings.thresholds={self.thresholds}: the ratios need K = 1, all K >= 1")
+        ks = self.thresholds
+        if 1 not in ks or min(ks) < 1 or len(set(ks)) < 2 or len(set(ks)) != len(ks):
+            raise ValueError(f"BenchSettings.thresholds={ks}: the ratios need K = 1 and at least one "
+                             "more K, all distinct and >= 1")
+        if self.calls <= 0 or self.warmup < 1:
+            raise ValueError(f"BenchSettings: calls={self.calls} must be > 0 and warmup={self.warmup} >= 1 "
+                             "(the first round extracts both frames, it is not a streaming call)")
 
 
 def _frames(s: BenchSettings, n: int) -> list[np.ndarray]:
@@ -49,11 +54,15 @@ def _frames(s: BenchSettings, n: int) -> list[np.ndarray]:
 
 
 def _interleaved_median_ms(calls: dict, frames: list[np.ndarray], warmup: int) -> dict:
-    """name -> fn(prev, latest); round j times fn(f_j, f_j+1) of every name in turn.
+    """name -> fn(prev, latest); round j times fn(f_j, f_j+1) of every name in turn, the
+    order rotated by one each round (so no setting always follows the same other one).
     -> name -> median wall time [ms] over the rounds after ``warmup``."""
     times: dict = {name: [] for name in calls}
+    names = list(calls)
     for j in range(len(frames) - 1):
-        for name, fn in calls.items():
+        r = j % len(names)
+        for name in names[r:] + names[:r]:
+            fn = calls[name]
             t0 = time.perf_counter()
             fn(frames[j], frames[j + 1])
             if j >= warmup:

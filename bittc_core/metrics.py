@@ -17,8 +17,10 @@ eta_i = tau_i / (tau_i + dt_s).
   often absent from an image) and averaged over the two classes.
 * breakdown (where the errors are): the mIoU per threshold; the (image, threshold)
   pairs of the mIoU grouped by the share of valid pixels inside the geofence
-  (``INSIDE_SHARE_EDGES``), with their mean two-class IoU and mean inside-class IoU; the
-  MiD of actor pixels and of static pixels apart.
+  (``INSIDE_SHARE_EDGES``), with their mean two-class IoU and their mean inside-class IoU
+  over the pairs where truth or prediction has inside pixels (``pairs_with_inside_union``;
+  in group "0" those are the pairs with false inside pixels, each scoring 0); the MiD of
+  actor pixels and of static pixels apart. Thresholds are keyed by ``threshold_key``.
 """
 
 from __future__ import annotations
@@ -65,6 +67,11 @@ def two_class_iou(counts: np.ndarray) -> float:
     return float(np.mean(ious)) if ious else float("nan")
 
 
+def threshold_key(tau_s: float) -> str:
+    """The JSON key (and listed value) of a threshold [s]: 4 decimals, trailing zeros cut."""
+    return f"{round(float(tau_s), 4):g}"
+
+
 def inside_share_group(inside_px: int, valid_px: int) -> str:
     """Label of the inside-share group of one (image, threshold) pair."""
     if inside_px == 0:
@@ -94,7 +101,7 @@ class MetricAccumulator:
     _errors: dict = field(default_factory=dict)
     _actor: dict = field(default_factory=dict)
     _latency_ms: list = field(default_factory=list)
-    _iou_by_threshold: list = field(default_factory=list)  # per image: K ious (nan: skipped)
+    _iou_by_threshold: list = field(default_factory=list)  # per image: MIOU_LEVELS ious (nan: skipped)
     _by_share: dict = field(default_factory=dict)  # label -> [[two-class iou], [inside iou]]
     _mid_parts: dict = field(default_factory=dict)  # "actor" / "static" -> [sum, count]
 
@@ -143,7 +150,7 @@ class MetricAccumulator:
             s, c = mid_terms(eta_hat, eta, valid)
             self._mid_sum += s
             self._mid_count += c
-            for part, mask in (("actor", actors), ("static", valid & (instance == 0))):
+            for part, mask in (("actor", actors), ("static", valid & ~actors)):
                 s, c = mid_terms(eta_hat, eta, mask)
                 self._mid_parts[part][0] += s
                 self._mid_parts[part][1] += c
@@ -169,10 +176,8 @@ class MetricAccumulator:
             return float(np.mean(values)) if len(values) else nan
 
         per_threshold = np.array(self._iou_by_threshold, dtype=np.float64).reshape(-1, len(self.miou_thresholds_s))
-        by_threshold = {f"{t:.4g}": mean(col[np.isfinite(col)]) for t, col in zip(self.miou_thresholds_s, per_threshold.T)}
-        # inside_iou: over the pairs where prediction or truth has inside pixels
-        # (in group "0" those are the pairs with false inside pixels, all scoring 0)
+        by_threshold = {threshold_key(t): mean(col[np.isfinite(col)]) for t, col in zip(self.miou_thresholds_s, per_threshold.T)}
         by_share = {label: {"pairs": len(g[0]), "miou": mean(g[0]), "inside_iou": mean(g[1]),
-                            "pairs_with_inside_pixels": len(g[1])} for label, g in self._by_share.items()}
+                            "pairs_with_inside_union": len(g[1])} for label, g in self._by_share.items()}
         mid = {f"mid_{part}": (s / c * MID_SCALE if c else nan) for part, (s, c) in self._mid_parts.items()}
         return {"miou_by_threshold_s": by_threshold, "by_inside_share": by_share, **mid}

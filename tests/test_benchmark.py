@@ -24,10 +24,16 @@ def test_interleaved_rounds_call_every_setting_on_the_same_pairs_in_turn():
     seen = []
     calls = {name: (lambda a, b, n=name: seen.append((n, a, b))) for name in ("x", "y")}
     ms = _interleaved_median_ms(calls, [0, 1, 2, 3], warmup=1)
-    assert seen == [("x", 0, 1), ("y", 0, 1), ("x", 1, 2), ("y", 1, 2), ("x", 2, 3), ("y", 2, 3)]
+    assert seen == [("x", 0, 1), ("y", 0, 1), ("y", 1, 2), ("x", 1, 2), ("x", 2, 3), ("y", 2, 3)]
     assert set(ms) == {"x", "y"} and all(v >= 0 for v in ms.values())
 
 
-def test_settings_need_one_threshold():
+@pytest.mark.parametrize("ks", [(2, 4), (1,), (1, 2, 2)])
+def test_settings_need_one_threshold_and_another_distinct_k(ks):
     with pytest.raises(ValueError, match="K = 1"):
-        BenchSettings(thresholds=(2, 4))
+        BenchSettings(thresholds=ks)
+
+
+def test_settings_need_a_warmup_round():
+    with pytest.raises(ValueError, match="warmup=0"):
+        BenchSettings(warmup=0)

@@ -5,8 +5,8 @@ import math
 import numpy as np
 import pytest
 
-from bittc_core.metrics import (MetricAccumulator, class_counts, mid_terms, miou_thresholds_s,
-                                two_class_iou)
+from bittc_core.metrics import (MetricAccumulator, class_counts, inside_share_group, mid_terms,
+                                miou_thresholds_s, threshold_key, two_class_iou)
 from bittc_core.ttc import eta_to_tau, tau_to_eta
 
 
@@ -68,6 +68,7 @@ def test_breakdown_groups_pairs_by_inside_share():
     eta = np.full((10, 10), 0.99)
     prob = np.zeros((len(acc.thresholds_s), 10, 10), np.float32)
     prob[:, 0, 0] = 1.0
+    prob[:3, 0, 0] = 0.0  # the three shortest geofences right: nothing inside, nothing said
     valid, static = np.ones(eta.shape, bool), np.zeros(eta.shape, np.int64)
     acc.add(prob, eta * np.exp(0.01), eta, valid, static)
     # image 2: a 3-pixel actor at 0.15 s (3 % of the pixels), predicted exactly
@@ -78,12 +79,23 @@ def test_breakdown_groups_pairs_by_inside_share():
     truth = np.stack([(eta2 <= tau_to_eta(t, dt)) for t in acc.thresholds_s]).astype(np.float32)
     acc.add(truth, eta2, eta2, valid, actor)
     b = acc.result()["breakdown"]
-    assert b["by_inside_share"]["0"] == {"pairs": n, "miou": pytest.approx((0 + 99 / 100) / 2),
-                                         "inside_iou": 0.0, "pairs_with_inside_pixels": n}
-    assert b["by_inside_share"]["0-5%"] == {"pairs": n, "miou": 1.0, "inside_iou": 1.0, "pairs_with_inside_pixels": n}
+    wrong = (0 + 99 / 100) / 2  # inside IoU 0, outside 99 / 100
+    assert b["by_inside_share"]["0"] == {"pairs": n, "miou": pytest.approx((3 * 1.0 + (n - 3) * wrong) / n),
+                                         "inside_iou": 0.0, "pairs_with_inside_union": n - 3}
+    assert b["by_inside_share"]["0-5%"] == {"pairs": n, "miou": 1.0, "inside_iou": 1.0, "pairs_with_inside_union": n}
     assert b["by_inside_share"]["20-100%"]["pairs"] == 0 and math.isnan(b["by_inside_share"]["20-100%"]["miou"])
-    assert all(v == pytest.approx((0.495 + 1.0) / 2) for v in b["miou_by_threshold_s"].values())
+    by_t = list(b["miou_by_threshold_s"].values())
+    assert by_t == pytest.approx([1.0] * 3 + [(wrong + 1.0) / 2] * (n - 3))
+    assert list(b["miou_by_threshold_s"]) == [threshold_key(t) for t in acc.miou_thresholds_s]
     assert b["mid_actor"] == pytest.approx(0.0) and b["mid_static"] == pytest.approx(0.01 * 1e4 * 100 / 197)
+
+
+def test_inside_share_group_edges():
+    assert inside_share_group(0, 1000) == "0" and inside_share_group(0, 0) == "0"
+    assert inside_share_group(49, 1000) == "0-5%" and inside_share_group(50, 1000) == "5-20%"
+    assert inside_share_group(199, 1000) == "5-20%" and inside_share_group(200, 1000) == "20-100%"
+    assert inside_share_group(1000, 1000) == "20-100%"
+    assert threshold_key(1.08888) == "1.0889" and threshold_key(2.0) == "2"
 
 
 def test_ttc_conventions():

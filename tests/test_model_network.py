@@ -5,7 +5,7 @@ import torch
 
 from bittc_core.model import CONFIGS, BinaryTTCNet, count_parameters, get_config
 from bittc_core.model.auc import auc_eta, uniform_levels
-from bittc_core.model.network import INFERENCE_HYPOTHESES
+from bittc_core.model.network import CPU_INFERENCE_HYPOTHESES
 from bittc_core.model.segnet import _broadcast_add
 
 H, W = 48, 96
@@ -41,14 +41,15 @@ def test_forward_backward_shapes_and_gradients(net):
 
 def test_thresholds_batched_equal_one_at_a_time(net):
     net.eval()
-    prev, latest = frames(b=1)
-    # more thresholds than one inference batch of SegNet holds, so the chunks are covered
-    eta = torch.linspace(0.7, 1.1, INFERENCE_HYPOTHESES * 2 + 3)[None]
-    k = eta.shape[1]
+    prev, latest = frames(b=2)
+    # more thresholds than one inference batch of SegNet holds, so the chunks are covered;
+    # two images with different thresholds, so a mix-up of image and threshold order shows
+    k = CPU_INFERENCE_HYPOTHESES * 2 + 3
+    eta = torch.stack([torch.linspace(0.7, 1.1, k), torch.linspace(1.05, 0.75, k)])
     with torch.no_grad():
         together = net(prev, latest, eta)
         alone = torch.cat([net(prev, latest, eta[:, i:i + 1]) for i in range(k)], dim=1)
-    assert together.shape == (1, k, H, W)
+    assert together.shape == (2, k, H, W)
     torch.testing.assert_close(together, alone, atol=1e-5, rtol=1e-4)
 
 

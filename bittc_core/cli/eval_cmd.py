@@ -55,10 +55,8 @@ def _check(args) -> Path:
 
 
 def evaluate(estimator, dataset, limit: int | None) -> dict:
-    import numpy as np
-
     from bittc_core.estimator import OracleEstimator
-    from bittc_core.metrics import MetricAccumulator
+    from bittc_core.metrics import MetricAccumulator, threshold_key
 
     acc = MetricAccumulator(dt_s=estimator.dt_s)
     n = len(dataset) if limit is None else min(limit, len(dataset))
@@ -77,7 +75,7 @@ def evaluate(estimator, dataset, limit: int | None) -> dict:
                 s["instance"].numpy(), latency_ms=latency)
     result = acc.result()
     result["pairs"] = n
-    result["miou_thresholds_s"] = [float(t) for t in np.round(acc.miou_thresholds_s, 4)]
+    result["miou_thresholds_s"] = [float(threshold_key(t)) for t in acc.miou_thresholds_s]
     return result
 
 
@@ -94,7 +92,7 @@ def format_table(r: dict) -> str:
         lines.append("mIoU pairs by share of pixels inside the geofence:")
         for label, g in b["by_inside_share"].items():
             lines.append(f"  {label:>8}: {g['pairs']:>6} pairs, mIoU {g['miou']:.3f}, inside-class IoU "
-                         f"{g['inside_iou']:.3f} over {g['pairs_with_inside_pixels']} pairs")
+                         f"{g['inside_iou']:.3f} over {g['pairs_with_inside_union']} pairs")
     return "\n".join(lines)
 
 

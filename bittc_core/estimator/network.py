@@ -8,7 +8,8 @@ whether the caller passes the same object, a copy, or a fresh numpy array each c
 in a stream (f0, f1), (f1, f2), ... the features of f1 computed as the latest frame
 are reused when f1 comes back as ``image_prev``; calling ``geofence`` and then
 ``continuous`` on the same pair recomputes nothing but the hypotheses. All thresholds
-of a call share the same features and are classified in one batch.
+of a call share the same features and are classified together (in batches of
+``CPU_INFERENCE_HYPOTHESES`` on a CPU, see ``bittc_core.model.network``).
 """
 
 from __future__ import annotations

@@ -12,7 +12,8 @@ Outputs are logits of
 
 Cost split for streaming and for many thresholds: ``extract`` runs once per frame
 (cache it), ``prepare_reference`` once per (reference frame) and the classify calls
-once per batch of hypotheses, all hypotheses stacked along the batch dimension.
+once per batch of hypotheses, the hypotheses stacked along the batch dimension (at
+inference on a CPU in SegNet batches of ``CPU_INFERENCE_HYPOTHESES``).
 """
 
 from __future__ import annotations
@@ -32,9 +33,10 @@ from bittc_core.model.segnet import HEAD_TTC, HEAD_U, HEAD_V, ReferenceTerms, Se
 from bittc_core.model.warp import PaddedGrid, scale_warp, shift_warp
 
 FEATURE_STRIDE = 3  # [input px per feature px]
-# hypotheses per SegNet batch at inference: on 2 CPU cores at 96x288, 24 thresholds in
-# one batch cost 74 ms, in batches of 8 58 ms (4: 66 ms, 12: 70 ms), interleaved timing
-INFERENCE_HYPOTHESES = 8
+# hypotheses per SegNet batch at inference on a CPU: on 2 cores at 96x288, 24 thresholds
+# in one batch cost 74 ms, in batches of 8 58 ms (4: 66 ms, 12: 70 ms), interleaved
+# timing; on a GPU one batch keeps the device busy, so there all go at once
+CPU_INFERENCE_HYPOTHESES = 8
 
 
 @dataclass
@@ -99,11 +101,13 @@ class BinaryTTCNet(nn.Module):
                      eta: torch.Tensor) -> torch.Tensor:
         """eta thresholds (B, K) -> refined logits of p(eta <= eta_i), (B, K, H, W).
 
-        In eval mode the hypotheses go through SegNet ``INFERENCE_HYPOTHESES`` at a time
-        (exact: eval-mode batch norm treats samples independently); in training mode all
-        at once, so batch norm sees the whole batch."""
+        In eval mode on a CPU the hypotheses go through SegNet ``CPU_INFERENCE_HYPOTHESES``
+        at a time (exact: eval-mode batch norm treats samples independently); in training
+        mode all at once, so batch norm sees the whole batch."""
         b, k = eta.shape
-        chunk = INFERENCE_HYPOTHESES if not self.training else k
+        if k == 0:
+            raise ValueError("classify_eta: no eta thresholds")
+        chunk = CPU_INFERENCE_HYPOTHESES if not self.training and eta.device.type == "cpu" else k
         refined = []
         for start in range(0, k, chunk):
             part = eta[:, start:start + chunk]
