@@ -95,9 +95,6 @@ class MetricAccumulator:
 
     dt_s: float
     miou_thresholds_s: np.ndarray = field(init=False)
-    _ious: list = field(default_factory=list)
-    _mid_sum: float = 0.0
-    _mid_count: int = 0
     _errors: dict = field(default_factory=dict)
     _actor: dict = field(default_factory=dict)
     _latency_ms: list = field(default_factory=list)
@@ -136,9 +133,6 @@ class MetricAccumulator:
                 if counts[0, 1] > 0:
                     group[1].append(counts[0, 0] / counts[0, 1])
         self._iou_by_threshold.append(ious)
-        ious = [x for x in ious if np.isfinite(x)]
-        if ious:
-            self._ious.append(float(np.mean(ious)))
         actors = valid & (instance > 0)
         for j, t in enumerate(ERROR_RATE_TAUS_S):
             truth = inside_geofence(eta, tau_to_eta(t, self.dt_s))
@@ -146,10 +140,7 @@ class MetricAccumulator:
             self._errors[t][1] += int(valid.sum())
             if t in self._actor:
                 self._actor[t] += class_counts(pred[n + j], truth, actors)
-        if eta_hat is not None:
-            s, c = mid_terms(eta_hat, eta, valid)
-            self._mid_sum += s
-            self._mid_count += c
+        if eta_hat is not None:  # valid = actor + static pixels, the MiD sums their parts
             for part, mask in (("actor", actors), ("static", valid & ~actors)):
                 s, c = mid_terms(eta_hat, eta, mask)
                 self._mid_parts[part][0] += s
@@ -159,13 +150,16 @@ class MetricAccumulator:
 
     def result(self) -> dict:
         nan = float("nan")
+        # per image: the mean IoU over the thresholds with a finite IoU; images with none skipped
+        per_image = [float(np.mean(f)) for f in ([x for x in row if np.isfinite(x)] for row in self._iou_by_threshold) if f]
+        mid_sum, mid_count = (sum(v) for v in zip(*self._mid_parts.values()))
         return {
-            "miou": float(np.mean(self._ious)) if self._ious else nan,
-            "mid": self._mid_sum / self._mid_count * MID_SCALE if self._mid_count else nan,
+            "miou": float(np.mean(per_image)) if per_image else nan,
+            "mid": mid_sum / mid_count * MID_SCALE if mid_count else nan,
             "error_rate": {f"{t:g}": (e / n if n else nan) for t, (e, n) in self._errors.items()},
             "actor_iou": {f"{t:g}": two_class_iou(c) for t, c in self._actor.items()},
             "latency_ms": float(np.mean(self._latency_ms)) if self._latency_ms else nan,
-            "images": len(self._ious),
+            "images": len(per_image),
             "breakdown": self._breakdown(),
         }
 

@@ -63,6 +63,14 @@ class StaticShape:
     center_m: tuple[float, float, float]
     size_m: tuple[float, ...]
 
+    @classmethod
+    def box(cls, center_m, half_extents_m) -> "StaticShape":
+        return cls("box", tuple(map(float, center_m)), tuple(map(float, half_extents_m)))
+
+    @classmethod
+    def sphere(cls, center_m, radius_m: float) -> "StaticShape":
+        return cls("sphere", tuple(map(float, center_m)), (float(radius_m),))
+
 
 class _Materials:
     """Static shapes grouped by material (texture id, colour), in first-use order."""
@@ -71,12 +79,10 @@ class _Materials:
         self.groups: dict[tuple[int | None, tuple[float, ...]], list[StaticShape]] = {}
 
     def box(self, center_m, half_extents_m, texture_id: int | None, rgb=(1.0, 1.0, 1.0)) -> None:
-        self.groups.setdefault((texture_id, tuple(rgb)), []).append(
-            StaticShape("box", tuple(map(float, center_m)), tuple(map(float, half_extents_m))))
+        self.groups.setdefault((texture_id, tuple(rgb)), []).append(StaticShape.box(center_m, half_extents_m))
 
     def sphere(self, center_m, radius_m: float, texture_id: int | None) -> None:
-        self.groups.setdefault((texture_id, (1.0, 1.0, 1.0)), []).append(
-            StaticShape("sphere", tuple(map(float, center_m)), (float(radius_m),)))
+        self.groups.setdefault((texture_id, (1.0, 1.0, 1.0)), []).append(StaticShape.sphere(center_m, radius_m))
 
     def add_to(self, world: World) -> None:
         for (texture_id, rgb), shapes in self.groups.items():

@@ -192,12 +192,8 @@ class World:
         return uids
 
     def add_static_box(self, center_m, half_extents_m, texture_id: int | None, rgb=(1.0, 1.0, 1.0)) -> int:
-        vs = self.client.createVisualShape(p.GEOM_BOX, halfExtents=list(half_extents_m), rgbaColor=[*rgb, 1.0])
-        uid = self.client.createMultiBody(0, -1, vs, basePosition=list(center_m))
-        if texture_id is not None:
-            self.client.changeVisualShape(uid, -1, textureUniqueId=texture_id)
-        self._register(uid, 0)
-        return uid
+        """One static box (``half_extents_m`` [m]); returns its body uid."""
+        return self.add_static_shapes([StaticShape.box(center_m, half_extents_m)], texture_id, rgb)[0]
 
     def add_vehicle(self, spec: VehicleSpec) -> int:
         """Add a vehicle (hidden below ground until posed); returns its instance id.
