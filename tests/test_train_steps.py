@@ -10,7 +10,8 @@ from bittc_core.data.synthetic import SyntheticConfig, SyntheticPairs
 from bittc_core.errors import CliError
 from bittc_core.model import BinaryTTCNet, get_config
 from bittc_core.train import RunPaths, TrainConfig, Trainer
-from bittc_core.train.losses import masked_bce
+from bittc_core.metrics import class_counts, two_class_iou
+from bittc_core.train.losses import lovasz_two_class, masked_bce
 from bittc_core.train.targets import eta_labels, shift_labels
 
 SMALL = SyntheticConfig(height_px=48, width_px=96, patch_half_size_px=(6.0, 20.0), max_translation_px=6.0)
@@ -25,9 +26,10 @@ def make_trainer(tmp_path, stage, steps=30, **kw):
                    torch.device("cpu"), RunPaths.from_out(tmp_path / "m.pt"))
 
 
-@pytest.mark.parametrize("stage, actor_weight", [("flow", 1.0), ("binary", 1.0), ("binary", 3.0)])
-def test_a_few_steps_lower_the_loss(tmp_path, stage, actor_weight):
-    tr = make_trainer(tmp_path, stage, actor_weight=actor_weight)
+@pytest.mark.parametrize("stage, actor_weight, lovasz_weight",
+                         [("flow", 1.0, 0.0), ("binary", 1.0, 0.0), ("binary", 3.0, 0.0), ("binary", 1.0, 0.5)])
+def test_a_few_steps_lower_the_loss(tmp_path, stage, actor_weight, lovasz_weight):
+    tr = make_trainer(tmp_path, stage, actor_weight=actor_weight, lovasz_weight=lovasz_weight)
     batch = next(iter(tr.loader))  # one fixed batch: the loss must go down on it
     losses = []
     for step in range(30):
@@ -91,6 +93,26 @@ def test_weighted_bce():
     assert torch.allclose(weighted, (per[0] + 4 * per[1]) / 5)  # the masked pixel's weight is unused
 
 
+def test_lovasz_equals_the_two_class_iou_loss_at_hard_predictions():
+    gen = torch.Generator().manual_seed(0)
+    labels = (torch.rand(3, 2, 9, 11, generator=gen) < 0.3).float()
+    labels[1, 0] = 0.0  # empty geofence: one stray pixel below halves the metric
+    wrong = torch.rand(3, 2, 9, 11, generator=gen) < 0.2
+    pred = torch.where(wrong, 1.0 - labels, labels)
+    pred[1, 0] = 0.0
+    pred[1, 0, 4, 5] = 1.0
+    mask = torch.rand(3, 1, 9, 11, generator=gen) < 0.9
+    mask[1] = True
+    logits = 40.0 * (2.0 * pred - 1.0)  # saturated: sigmoid 0 or 1
+    expected = [1.0 - two_class_iou(class_counts(pred[i, k].bool().numpy(), labels[i, k].bool().numpy(),
+                                                 mask[i, 0].numpy()))
+                for i in range(3) for k in range(2)]
+    assert expected[2] == pytest.approx(1.0 - 0.5 * (1.0 - 1 / 99))
+    assert lovasz_two_class(logits, labels, mask).item() == pytest.approx(sum(expected) / 6, abs=1e-5)
+    # perfect predictions: zero
+    assert lovasz_two_class(40.0 * (2.0 * labels - 1.0), labels, mask).item() == pytest.approx(0.0, abs=1e-6)
+
+
 def test_labels():
     eta = torch.tensor([[[0.5, 0.9, 1.0, 1.2, -1.0]]])
     lab = eta_labels(eta, torch.tensor([[0.9, 1.1]]))
@@ -103,7 +125,7 @@ def test_labels():
 def args(**kw):
     base = dict(data="synthetic", config="tiny", out="m.pt", resume=False, init=None, seed=0, steps=10,
                 batch_size=2, lr=3e-4, val_every=5, val_limit=4, device="cpu", stage="binary", freeze_binary=False,
-                actor_weight=1.0)
+                actor_weight=1.0, lovasz_weight=0.0)
     base.update(kw)
     return argparse.Namespace(**base)
 
@@ -119,6 +141,7 @@ def args(**kw):
     (dict(seed=-1), "--seed -1"),
     (dict(resume=True, init="x.pt"), "exclude"),
     (dict(actor_weight=0.0), "--actor-weight 0.0"),
+    (dict(lovasz_weight=-1.0), "--lovasz-weight -1.0"),
     (dict(freeze_binary=True), "--freeze-binary applies to the continuous stage, not --stage 'binary'"),
 ])
 def test_train_flags_are_validated(kw, match):

@@ -38,6 +38,9 @@ def add_parser(sub) -> argparse.ArgumentParser:
     p.add_argument("--stage", default="binary", help="flow, binary, continuous or all (default binary)")
     p.add_argument("--actor-weight", type=float, default=1.0,
                    help="binary stage: loss weight of moving-actor pixels, static pixels 1 (default 1)")
+    p.add_argument("--lovasz-weight", type=float, default=0.0,
+                   help="binary stage: add this weight x a Lovasz surrogate of the per-map two-class IoU "
+                        "to the BCE (default 0)")
     p.add_argument("--freeze-binary", action="store_true",
                    help="continuous stage: train the continuous refinement only, the binary network frozen")
     return p
@@ -63,6 +66,8 @@ def _check(args) -> None:
         raise CliError(f"--out {args.out!r}: expected a file name ending in .pt")
     if not args.actor_weight > 0:
         raise CliError(f"--actor-weight {args.actor_weight}: must be > 0")
+    if not args.lovasz_weight >= 0:
+        raise CliError(f"--lovasz-weight {args.lovasz_weight}: must be >= 0")
     if args.freeze_binary and args.stage not in ("continuous", "all"):
         raise CliError(f"--freeze-binary applies to the continuous stage, not --stage {args.stage!r}")
     if args.resume and args.init:
@@ -123,7 +128,7 @@ def run(args) -> int:
 
     base = TrainConfig(steps=args.steps, batch_size=args.batch_size, lr=args.lr,
                        val_every=args.val_every, val_limit=args.val_limit, seed=args.seed,
-                       actor_weight=args.actor_weight)
+                       actor_weight=args.actor_weight, lovasz_weight=args.lovasz_weight)
     write_yaml_atomic(paths.config, {
         "argv": list(sys.argv),
         "data": args.data, "device": str(device), "stages": stages,

@@ -22,6 +22,7 @@ class TrainConfig:
     train_tau_min_s: float = 0.2  # [s] thresholds: eta uniform in [eta(tau_min), eta_max]
     train_eta_max: float = 1.1  # > 1: receding thresholds too (their negatives matter)
     actor_weight: float = 1.0  # binary TTC loss weight of moving-actor pixels (instance > 0), static 1
+    lovasz_weight: float = 0.0  # binary stage: + this x Lovasz two-class IoU surrogate per map
     ttc_weight: float = 0.8  # paper: binary TTC 0.8, binary flow 0.2
     flow_weight: float = 0.2
     cont_bce_weight: float = 0.1  # paper: BCE on the stacked maps 0.1, SmoothL1 on AUC 0.9
@@ -47,5 +48,7 @@ class TrainConfig:
             raise ValueError(f"freeze_binary applies to the continuous stage, not {self.stage!r}")
         if self.actor_weight <= 0:
             raise ValueError(f"actor_weight={self.actor_weight}: must be > 0")
+        if self.lovasz_weight < 0:
+            raise ValueError(f"lovasz_weight={self.lovasz_weight}: must be >= 0")
         if self.lr <= 0 or self.clip_grad_norm <= 0:
             raise ValueError("lr and clip_grad_norm must be > 0")

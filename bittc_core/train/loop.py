@@ -1,8 +1,9 @@
 """The training loop of one stage (paper Sec. 4.4 and Supp. B).
 
 Stages: ``flow``: binary-flow pre-training, TTC head unsupervised; ``binary``: binary
-TTC (several eta thresholds per pair, moving-actor pixels weighted ``actor_weight``) +
-binary flow auxiliary, weights 0.8 / 0.2;
+TTC (several eta thresholds per pair, moving-actor pixels weighted ``actor_weight``; BCE,
+plus ``lovasz_weight`` x a Lovasz surrogate of the per-map two-class IoU) + binary flow
+auxiliary, weights 0.8 / 0.2;
 ``continuous``: the stacked TTC volume, BCE on its maps (0.1) + SmoothL1 on the AUC and
 refined log eta (0.9), still with the flow auxiliary (0.8 / 0.2); with
 ``freeze_binary`` only ContRefineNet learns (SmoothL1 on the refined log eta).
@@ -30,12 +31,13 @@ from bittc_core.checkpoint import load_checkpoint, make_payload, save_checkpoint
 from bittc_core.model import BinaryTTCNet
 from bittc_core.model.auc import auc_eta
 from bittc_core.train.config import TrainConfig
-from bittc_core.train.losses import masked_bce, masked_smooth_l1
+from bittc_core.train.losses import lovasz_two_class, masked_bce, masked_smooth_l1
 from bittc_core.train.targets import eta_labels, sample_eta, sample_shifts_px, shift_labels, valid_mask
 from bittc_core.train.validate import validate
 
+# new columns go last, so a run resumed from an older log keeps its columns aligned
 CSV_FIELDS = ("step", "stage", "loss", "loss_ttc", "loss_flow", "loss_cont", "lr", "grad_norm",
-              "s_per_step", "val_miou", "val_mid")
+              "s_per_step", "val_miou", "val_mid", "loss_iou")
 
 
 @dataclass(frozen=True)
@@ -139,7 +141,11 @@ class Trainer:
             weight = None
             if c.actor_weight != 1.0:
                 weight = torch.where(batch["instance"] > 0, c.actor_weight, 1.0)[:, None]
-            out["ttc"] = masked_bce(logits, eta_labels(eta, thr), mask[:, None], weight)
+            labels = eta_labels(eta, thr)
+            out["ttc"] = masked_bce(logits, labels, mask[:, None], weight)
+            if c.lovasz_weight > 0:
+                out["iou"] = lovasz_two_class(logits, labels, mask[:, None])
+                out["ttc"] = out["ttc"] + c.lovasz_weight * out["iou"]
         else:
             cont = net.continuous(ctx, feats[:b])
             levels = cont.levels.expand(b, -1)
