@@ -1,5 +1,7 @@
 """The tiny network: shapes, gradients, batching of thresholds, split convs, AUC, sizes."""
 
+import dataclasses
+
 import pytest
 import torch
 
@@ -82,6 +84,21 @@ def test_auc_of_a_step_returns_its_location():
     centre = levels[10].item()
     prob_le = torch.sigmoid((levels - centre) / 0.01)[None, :, None, None]
     assert auc_eta(prob_le, lo, hi).item() == pytest.approx(centre, abs=1e-4)
+
+
+@pytest.mark.parametrize("levels", [False, True])
+def test_untrained_cont_refiner_returns_the_auc(levels):
+    torch.manual_seed(0)
+    net = BinaryTTCNet(dataclasses.replace(get_config("tiny"), cont_refine_levels=levels)).eval()
+    prev, latest = frames()
+    with torch.no_grad():
+        feats = net.extract(torch.cat((prev, latest)))
+        cont = net.continuous(net.prepare_reference(feats[2:], latest), feats[:2])
+    torch.testing.assert_close(cont.log_eta, torch.log(cont.eta_auc))
+    # a refiner that reads the level maps needs all of them
+    if levels:
+        with pytest.raises(ValueError, match="expected 8 level maps, got 7"):
+            net.cont_refine(cont.log_eta, latest, cont.prob_le[:, :7])
 
 
 def test_image_size_must_be_multiple_of_three(net):

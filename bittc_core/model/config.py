@@ -41,6 +41,7 @@ class ModelConfig:
     # ContRefineNet (StereoNet-style refinement of the AUC output)
     cont_channels: int = 32
     cont_dilations: tuple[int, ...] = (1, 2, 4, 8, 1, 1)
+    cont_refine_levels: bool = False  # also feed it the stacked maps (not in the paper)
     # normalisation layers: "none" (the paper), "batch" or "group"
     norm: str = "none"
     # trained ranges
@@ -107,6 +108,7 @@ CONFIGS: dict[str, ModelConfig] = {
         refine_layers=1,
         cont_channels=16,
         cont_dilations=(1, 2, 4, 1),
+        cont_refine_levels=True,
         norm="batch",
     ),
     "tiny": ModelConfig(

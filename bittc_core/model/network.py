@@ -73,8 +73,8 @@ class BinaryTTCNet(nn.Module):
         )
         self.refine = SegRefineNet(guide_channels=c.guide_channels,
                                    channels=c.refine_channels, layers=c.refine_layers)
-        self.cont_refine = ContRefineNet(channels=c.cont_channels,
-                                         dilations=c.cont_dilations, norm=c.norm)
+        self.cont_refine = ContRefineNet(channels=c.cont_channels, dilations=c.cont_dilations,
+                                         norm=c.norm, levels=c.cont_levels if c.cont_refine_levels else 0)
 
     # -- per frame ------------------------------------------------------------------
     def extract(self, images: torch.Tensor) -> torch.Tensor:
@@ -133,7 +133,7 @@ class BinaryTTCNet(nn.Module):
         levels = uniform_levels(c.cont_eta_min, c.cont_eta_max, c.cont_levels, device=feat_src.device)
         prob_le = torch.sigmoid(self.classify_eta(ctx, feat_src, levels.expand(b, -1)))
         eta_auc = auc_eta(prob_le, c.cont_eta_min, c.cont_eta_max)
-        log_eta = self.cont_refine(torch.log(eta_auc), ctx.image)
+        log_eta = self.cont_refine(torch.log(eta_auc), ctx.image, prob_le)
         return ContinuousOutput(levels=levels, prob_le=prob_le, eta_auc=eta_auc, log_eta=log_eta)
 
     # -- convenience ----------------------------------------------------------------
