@@ -63,6 +63,8 @@ def test_frozen_continuous_stage_trains_the_continuous_refiner_only(tmp_path):
     assert any(not torch.equal(tr.net.cont_refine.state_dict()[k], v) for k, v in refiner.items())
     with pytest.raises(ValueError, match="not 'binary'"):
         TrainConfig(stage="binary", freeze_binary=True)
+    with pytest.raises(ValueError, match="warmup_steps=-1"):
+        TrainConfig(warmup_steps=-1)
 
 
 def test_run_writes_outputs_and_resume_restores_state(tmp_path):
@@ -124,7 +126,7 @@ def test_labels():
 
 def args(**kw):
     base = dict(data="synthetic", config="tiny", out="m.pt", resume=False, init=None, seed=0, steps=10,
-                batch_size=2, lr=3e-4, val_every=5, val_limit=4, device="cpu", stage="binary", freeze_binary=False,
+                batch_size=2, lr=3e-4, warmup_steps=2, val_every=5, val_limit=4, device="cpu", stage="binary", freeze_binary=False,
                 actor_weight=1.0, lovasz_weight=0.0)
     base.update(kw)
     return argparse.Namespace(**base)
@@ -136,6 +138,7 @@ def args(**kw):
     (dict(steps=0), "--steps 0"),
     (dict(batch_size=-2), "--batch-size -2"),
     (dict(lr=5.0), "--lr 5.0"),
+    (dict(warmup_steps=-1), "--warmup-steps -1"),
     (dict(out="model.bin"), "model.bin"),
     (dict(device="tpu"), "--device 'tpu'"),
     (dict(seed=-1), "--seed -1"),

@@ -32,6 +32,8 @@ def add_parser(sub) -> argparse.ArgumentParser:
     p.add_argument("--steps", type=int, default=2000, help="optimiser steps per stage (default 2000)")
     p.add_argument("--batch-size", type=int, default=8)
     p.add_argument("--lr", type=float, default=3e-4, help="peak learning rate (default 3e-4)")
+    p.add_argument("--warmup-steps", type=int, default=200,
+                   help="linear warm-up steps before the cosine decay, per stage (default 200)")
     p.add_argument("--val-every", type=int, default=250, help="steps between validations")
     p.add_argument("--val-limit", type=int, default=64, help="validation pairs")
     add_device_flag(p)
@@ -62,6 +64,8 @@ def _check(args) -> None:
         raise CliError(f"--seed {args.seed}: must be >= 0")
     if not 0 < args.lr < 1:
         raise CliError(f"--lr {args.lr}: must be in (0, 1)")
+    if args.warmup_steps < 0:
+        raise CliError(f"--warmup-steps {args.warmup_steps}: must be >= 0")
     if not args.out.endswith(".pt"):
         raise CliError(f"--out {args.out!r}: expected a file name ending in .pt")
     if not args.actor_weight > 0:
@@ -126,7 +130,7 @@ def run(args) -> int:
             raise CliError(f"--resume: {paths.last.name} is at stage {resume_stage!r}, not in {stages}")
         stages = stages[stages.index(resume_stage):]
 
-    base = TrainConfig(steps=args.steps, batch_size=args.batch_size, lr=args.lr,
+    base = TrainConfig(steps=args.steps, batch_size=args.batch_size, lr=args.lr, warmup_steps=args.warmup_steps,
                        val_every=args.val_every, val_limit=args.val_limit, seed=args.seed,
                        actor_weight=args.actor_weight, lovasz_weight=args.lovasz_weight)
     write_yaml_atomic(paths.config, {

@@ -50,5 +50,7 @@ class TrainConfig:
             raise ValueError(f"actor_weight={self.actor_weight}: must be > 0")
         if self.lovasz_weight < 0:
             raise ValueError(f"lovasz_weight={self.lovasz_weight}: must be >= 0")
+        if self.warmup_steps < 0:
+            raise ValueError(f"warmup_steps={self.warmup_steps}: must be >= 0")
         if self.lr <= 0 or self.clip_grad_norm <= 0:
             raise ValueError("lr and clip_grad_norm must be > 0")
