@@ -63,6 +63,9 @@ def test_frozen_continuous_stage_trains_the_continuous_refiner_only(tmp_path):
     assert any(not torch.equal(tr.net.cont_refine.state_dict()[k], v) for k, v in refiner.items())
     with pytest.raises(ValueError, match="not 'binary'"):
         TrainConfig(stage="binary", freeze_binary=True)
+
+
+def test_train_config_refuses_a_negative_warmup():
     with pytest.raises(ValueError, match="warmup_steps=-1"):
         TrainConfig(warmup_steps=-1)
 
@@ -126,8 +129,8 @@ def test_labels():
 
 def args(**kw):
     base = dict(data="synthetic", config="tiny", out="m.pt", resume=False, init=None, seed=0, steps=10,
-                batch_size=2, lr=3e-4, warmup_steps=2, val_every=5, val_limit=4, device="cpu", stage="binary", freeze_binary=False,
-                actor_weight=1.0, lovasz_weight=0.0)
+                batch_size=2, lr=3e-4, warmup_steps=2, val_every=5, val_limit=4, device="cpu", stage="binary",
+                freeze_binary=False, actor_weight=1.0, lovasz_weight=0.0)
     base.update(kw)
     return argparse.Namespace(**base)
 
