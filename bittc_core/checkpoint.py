@@ -18,7 +18,7 @@ from pathlib import Path
 import torch
 
 from bittc_core.errors import CliError
-from bittc_core.model import CONFIGS, BinaryTTCNet, ModelConfig
+from bittc_core.model import CONFIGS, BinaryTTCNet, ModelConfig, get_config
 
 DEFAULT_WEIGHTS = Path(__file__).resolve().parent / "weights" / "bittc_default.pt"
 TRAIN_DEFAULT_HINT = (
@@ -62,6 +62,12 @@ def make_payload(net: BinaryTTCNet, config_name: str, train_meta: dict,
     return payload
 
 
+def release_payload(ckpt: dict) -> dict:
+    """What a shipped file keeps of a loaded checkpoint: ``REQUIRED_KEYS`` only (not the
+    resumable ``train_state``, nor ``model_config``, which loading derives)."""
+    return {k: ckpt[k] for k in REQUIRED_KEYS}
+
+
 def load_checkpoint(path: str | os.PathLike, map_location: str | torch.device = "cpu",
                     expected_config: str | None = None) -> dict:
     """Load and validate. ``expected_config``: the registry name the caller needs."""
@@ -100,6 +106,30 @@ def build_network(ckpt: dict) -> BinaryTTCNet:
     except RuntimeError as err:
         raise CheckpointError(f"checkpoint weights do not fit config "
                               f"{ckpt['config_name']!r}: {str(err).splitlines()[0]}") from None
+    return net
+
+
+def init_network(path: str | os.PathLike, config_name: str) -> BinaryTTCNet:
+    """A network of config ``config_name`` starting from the weights of ``path``.
+
+    The checkpoint's config must be that config, or that config without the
+    global-context block (``ModelConfig.global_context``): the block then keeps its
+    initialisation, the identity, so the network computes what the checkpoint did.
+    """
+    ckpt = load_checkpoint(path, map_location="cpu")
+    target = get_config(config_name)
+    source = ckpt["model_config"]
+    if source == target:
+        return build_network(ckpt)
+    if source.global_context or dataclasses.replace(source, global_context=True) != target:
+        raise CheckpointError(f"--init {str(path)!r}: its config ({ckpt['config_name']!r}) is neither "
+                              f"{config_name!r} nor {config_name!r} without the global-context block")
+    net = BinaryTTCNet(target)
+    missing, unexpected = net.load_state_dict(ckpt["state_dict"], strict=False)
+    added = [k for k in missing if ".context." not in k]
+    if added or unexpected:
+        raise CheckpointError(f"--init {str(path)!r}: weights do not fit config {config_name!r} "
+                              f"(missing {added}, unexpected {unexpected})")
     return net
 
 

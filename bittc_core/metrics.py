@@ -20,7 +20,11 @@ eta_i = tau_i / (tau_i + dt_s).
   (``INSIDE_SHARE_EDGES``), with their mean two-class IoU and their mean inside-class IoU
   over the pairs where truth or prediction has inside pixels (``pairs_with_inside_union``;
   in group "0" those are the pairs with false inside pixels, each scoring 0); the MiD of
-  actor pixels and of static pixels apart. Thresholds are keyed by ``threshold_key``.
+  actor pixels and of static pixels apart; when ``add`` gets the ego speed, the images
+  grouped by it (``EGO_SPEED_EDGES_MPS``) with their mIoU and the error of their static
+  pixels at tau = 1 s split into false inside and missed (a standing ego's static world
+  has tau = inf, a moving one's ground tau = Z / v_ego). Thresholds are keyed by
+  ``threshold_key``.
 """
 
 from __future__ import annotations
@@ -39,6 +43,9 @@ MID_MAX_LOG_ETA = float(np.log(2.0))
 MID_SCALE = 1e4
 INSIDE_SHARE_EDGES = (0.05, 0.2)  # inside-share groups: 0, (0, 5 %), [5, 20 %), [20, 100 %]
 INSIDE_SHARE_LABELS = ("0", "0-5%", "5-20%", "20-100%")
+EGO_SPEED_EDGES_MPS = (0.5, 5.0, 15.0)  # [m/s] ego-speed groups of the breakdown
+EGO_SPEED_LABELS = ("<0.5", "0.5-5", "5-15", ">=15")
+STATIC_ERROR_TAU_S = 1.0  # [s] threshold of the static-pixel error by ego speed (one of ERROR_RATE_TAUS_S)
 
 
 def miou_thresholds_s(dt_s: float, levels: int = MIOU_LEVELS) -> np.ndarray:
@@ -101,6 +108,7 @@ class MetricAccumulator:
     _iou_by_threshold: list = field(default_factory=list)  # per image: MIOU_LEVELS ious (nan: skipped)
     _by_share: dict = field(default_factory=dict)  # label -> [[two-class iou], [inside iou]]
     _mid_parts: dict = field(default_factory=dict)  # "actor" / "static" -> [sum, count]
+    _by_speed: dict = field(default_factory=dict)  # label -> [[image miou], [false inside, missed, static px]]
 
     def __post_init__(self) -> None:
         self.miou_thresholds_s = miou_thresholds_s(self.dt_s)
@@ -108,6 +116,7 @@ class MetricAccumulator:
         self._mid_parts = {"actor": [0.0, 0], "static": [0.0, 0]}
         self._errors = {t: [0, 0] for t in ERROR_RATE_TAUS_S}
         self._actor = {t: np.zeros((2, 2), np.int64) for t in ACTOR_TAUS_S}
+        self._by_speed = {label: [[], np.zeros(3, np.int64)] for label in EGO_SPEED_LABELS}
 
     @property
     def thresholds_s(self) -> np.ndarray:
@@ -115,8 +124,10 @@ class MetricAccumulator:
         return np.concatenate([self.miou_thresholds_s, ERROR_RATE_TAUS_S])
 
     def add(self, prob: np.ndarray, eta_hat: np.ndarray | None, eta: np.ndarray,
-            valid: np.ndarray, instance: np.ndarray, latency_ms: float | None = None) -> None:
-        """prob: (K, H, W) geofence probabilities for ``thresholds_s``; eta_hat: (H, W) or None."""
+            valid: np.ndarray, instance: np.ndarray, latency_ms: float | None = None,
+            ego_speed_mps: float | None = None) -> None:
+        """prob: (K, H, W) geofence probabilities for ``thresholds_s``; eta_hat: (H, W) or None;
+        ego_speed_mps: the ego's speed at the latest frame [m/s], None where unknown."""
         if prob.shape[0] != len(self.thresholds_s):
             raise ValueError(f"expected {len(self.thresholds_s)} maps, got {prob.shape[0]}")
         pred = prob > 0.5
@@ -140,6 +151,15 @@ class MetricAccumulator:
             self._errors[t][1] += int(valid.sum())
             if t in self._actor:
                 self._actor[t] += class_counts(pred[n + j], truth, actors)
+        if ego_speed_mps is not None:
+            group = self._by_speed[EGO_SPEED_LABELS[int(np.searchsorted(EGO_SPEED_EDGES_MPS, ego_speed_mps, side="right"))]]
+            finite = [x for x in ious if np.isfinite(x)]
+            if finite:
+                group[0].append(float(np.mean(finite)))
+            static = valid & (instance == 0)
+            truth = inside_geofence(eta, tau_to_eta(STATIC_ERROR_TAU_S, self.dt_s))
+            p = pred[n + ERROR_RATE_TAUS_S.index(STATIC_ERROR_TAU_S)]
+            group[1] += [np.sum(p & ~truth & static), np.sum(~p & truth & static), np.sum(static)]
         if eta_hat is not None:  # valid = actor + static pixels, the MiD sums their parts
             for part, mask in (("actor", actors), ("static", valid & ~actors)):
                 s, c = mid_terms(eta_hat, eta, mask)
@@ -174,4 +194,12 @@ class MetricAccumulator:
         by_share = {label: {"pairs": len(g[0]), "miou": mean(g[0]), "inside_iou": mean(g[1]),
                             "pairs_with_inside_union": len(g[1])} for label, g in self._by_share.items()}
         mid = {f"mid_{part}": (s / c * MID_SCALE if c else nan) for part, (s, c) in self._mid_parts.items()}
-        return {"miou_by_threshold_s": by_threshold, "by_inside_share": by_share, **mid}
+        out = {"miou_by_threshold_s": by_threshold, "by_inside_share": by_share, **mid}
+        if any(len(g[0]) or g[1][2] for g in self._by_speed.values()):
+            key = f"{STATIC_ERROR_TAU_S:g}s"
+            out["by_ego_speed_mps"] = {
+                label: {"images": len(ious), "miou": mean(ious),
+                        f"static_false_inside_{key}": (fi / px if px else nan),
+                        f"static_missed_{key}": (mi / px if px else nan)}
+                for label, (ious, (fi, mi, px)) in self._by_speed.items()}
+        return out

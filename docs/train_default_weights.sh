@@ -26,7 +26,7 @@ bittc train --data "$DATA" --config cpu-small --stage binary --steps "$BINARY3_S
 bittc train --data "$DATA" --config cpu-small --stage binary --steps "$BINARY4_STEPS" --seed 4 --lr 2e-4 --val-every 1000 --val-limit 256 --lovasz-weight 0.5 --init "$OUT/binary3.pt" --out "$OUT/binary4.pt"
 bittc train --data "$DATA" --config cpu-small --stage continuous --freeze-binary --steps "$CONT_STEPS" --seed 0 --lr 5e-4 --val-every 250 --init "$OUT/binary4.pt" --out "$OUT/continuous.pt"
 # ship the continuous stage's best checkpoint (by val MiD; the binary part is the same in all)
-python -c "import sys; from bittc_core.checkpoint import load_checkpoint, save_checkpoint
-c = load_checkpoint(sys.argv[1], map_location='cpu'); [c.pop(k, None) for k in ('train_state', 'model_config')]; save_checkpoint(sys.argv[2], c)" \
+python -c "import sys; from bittc_core.checkpoint import load_checkpoint, release_payload, save_checkpoint
+save_checkpoint(sys.argv[2], release_payload(load_checkpoint(sys.argv[1], map_location='cpu')))" \
     "$OUT/continuous.pt" bittc_core/weights/bittc_default.pt
 echo "wrote bittc_core/weights/bittc_default.pt"

@@ -91,9 +91,12 @@ def test_dataset_tensors_have_documented_shapes_and_flip_consistently(tmp_path):
     expect = {"image_prev": ((3, 48, 144), torch.float32), "image_latest": ((3, 48, 144), torch.float32),
               "eta": ((48, 144), torch.float32), "tau_s": ((48, 144), torch.float32), "flow_px": ((2, 48, 144), torch.float32),
               "valid": ((48, 144), torch.bool), "instance": ((48, 144), torch.int64), "dt_s": ((), torch.float32),
-              "intrinsics": ((4,), torch.float32)}  # fmt: skip
+              "intrinsics": ((4,), torch.float32), "ego_speed_mps": ((), torch.float32)}  # fmt: skip
+    assert set(plain) == set(expect)
     for k, (shape, dtype) in expect.items():
         assert tuple(plain[k].shape) == shape and plain[k].dtype == dtype, k
+    meta = json.loads((tmp_path / "train" / "000000" / "meta.json").read_text())
+    assert float(plain["ego_speed_mps"]) == pytest.approx(meta["frames"][-1]["ego"]["speed_mps"])
     assert 0.0 <= plain["image_latest"].min() and plain["image_latest"].max() <= 1.0
     aug = TTCDataset(tmp_path, "train", augment=True, seed=1)
     for epoch in range(6):  # some epoch flips

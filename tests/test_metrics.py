@@ -90,6 +90,34 @@ def test_breakdown_groups_pairs_by_inside_share():
     assert b["mid_actor"] == pytest.approx(0.0) and b["mid_static"] == pytest.approx(0.01 * 1e4 * 100 / 197)
 
 
+def test_breakdown_by_ego_speed():
+    dt = 0.1
+    acc = MetricAccumulator(dt_s=dt)
+    assert "by_ego_speed_mps" not in acc.result()["breakdown"]  # no speeds given
+    k1 = len(acc.miou_thresholds_s) + list(acc.thresholds_s[len(acc.miou_thresholds_s):]).index(1.0)
+    valid = np.ones((4, 5), bool)
+    instance = np.zeros((4, 5), np.int64)
+    instance[0, 0] = 1  # an actor pixel: not static, left out of the static error
+    # standing ego: static world at eta = 1 (tau = inf); the map at 1 s says 5 static pixels are inside
+    eta = np.ones((4, 5))
+    prob = np.zeros((len(acc.thresholds_s), 4, 5), np.float32)
+    prob[k1, 3, :] = 1.0
+    prob[k1, 0, 0] = 1.0  # the actor pixel, wrong too
+    acc.add(prob, None, eta, valid, instance, ego_speed_mps=0.0)
+    # moving ego: the bottom row at 0.5 s, the rest far; the map at 1 s misses 2 of the 5
+    eta2 = np.full((4, 5), 0.999)
+    eta2[3, :] = tau_to_eta(0.5, dt)
+    truth = np.stack([(eta2 <= tau_to_eta(t, dt)) for t in acc.thresholds_s]).astype(np.float32)
+    truth[k1, 3, :2] = 0.0
+    acc.add(truth, None, eta2, valid, instance, ego_speed_mps=20.0)
+    b = acc.result()["breakdown"]["by_ego_speed_mps"]
+    assert list(b) == ["<0.5", "0.5-5", "5-15", ">=15"]
+    assert b["<0.5"]["images"] == 1 and b["<0.5"]["miou"] == pytest.approx(1.0)  # the metric maps were right
+    assert b["<0.5"]["static_false_inside_1s"] == pytest.approx(5 / 19) and b["<0.5"]["static_missed_1s"] == 0.0
+    assert b[">=15"]["static_missed_1s"] == pytest.approx(2 / 19) and b[">=15"]["static_false_inside_1s"] == 0.0
+    assert b["0.5-5"]["images"] == 0 and math.isnan(b["0.5-5"]["miou"])
+
+
 def test_inside_share_group_edges():
     assert inside_share_group(0, 1000) == "0" and inside_share_group(0, 0) == "0"
     assert inside_share_group(49, 1000) == "0-5%" and inside_share_group(50, 1000) == "5-20%"

@@ -1,12 +1,13 @@
-"""Checkpoint round trip, wrong config, corrupt file, missing default weights."""
+"""Checkpoint round trip, wrong config, corrupt file, missing default weights, --init
+across the global-context block, the release copy."""
 
 import dataclasses
 
 import pytest
 import torch
 
-from bittc_core.checkpoint import (DEFAULT_WEIGHTS, CheckpointError, build_network, load_checkpoint,
-                                   make_payload, save_checkpoint)
+from bittc_core.checkpoint import (DEFAULT_WEIGHTS, REQUIRED_KEYS, CheckpointError, build_network, init_network,
+                                   load_checkpoint, make_payload, release_payload, save_checkpoint)
 from bittc_core.model import BinaryTTCNet, get_config
 
 
@@ -56,3 +57,46 @@ def test_missing_default_weights_names_the_training_command(monkeypatch, tmp_pat
         pytest.skip("default weights are shipped")
     with pytest.raises(CheckpointError, match="bittc train .*bittc_default.pt"):
         load_checkpoint(DEFAULT_WEIGHTS)
+
+
+def _frames():
+    g = torch.Generator().manual_seed(1)
+    return torch.rand(1, 3, 96, 288, generator=g), torch.rand(1, 3, 96, 288, generator=g), torch.tensor([[0.8, 0.95]])
+
+
+def test_init_adds_the_global_context_block_as_the_identity(tmp_path):
+    torch.manual_seed(0)
+    plain = BinaryTTCNet(get_config("cpu-small")).eval()
+    path = tmp_path / "plain.pt"
+    save_checkpoint(path, make_payload(plain, "cpu-small", {}))
+    net = init_network(path, "cpu-small-gc").eval()
+    assert net.config == get_config("cpu-small-gc") and net.segnet.context is not None
+    with torch.no_grad():
+        torch.testing.assert_close(net(*_frames()), plain(*_frames()))
+        # the block is live: once its output conv is non-zero the logits change
+        net.segnet.context.expand.bias.fill_(0.5)
+        assert not torch.allclose(net(*_frames()), plain(*_frames()))
+
+
+def test_init_refuses_other_configs(tmp_path):
+    path = tmp_path / "tiny.pt"
+    save_checkpoint(path, make_payload(BinaryTTCNet(get_config("tiny")), "tiny", {}))
+    with pytest.raises(CheckpointError, match="neither 'cpu-small-gc' nor 'cpu-small-gc' without"):
+        init_network(path, "cpu-small-gc")
+    # the block is only ever added, never dropped
+    save_checkpoint(path, make_payload(BinaryTTCNet(get_config("cpu-small-gc")), "cpu-small-gc", {}))
+    with pytest.raises(CheckpointError, match="neither 'cpu-small'"):
+        init_network(path, "cpu-small")
+    assert init_network(path, "cpu-small-gc").config == get_config("cpu-small-gc")
+
+
+def test_release_payload_drops_training_state(tmp_path):
+    net = BinaryTTCNet(get_config("tiny"))
+    path = tmp_path / "last.pt"
+    save_checkpoint(path, make_payload(net, "tiny", {"step": 5}, train_state={"step": 5}))
+    ckpt = load_checkpoint(path, expected_config="tiny")
+    assert {"train_state", "model_config"} <= set(ckpt)
+    release = release_payload(ckpt)
+    assert sorted(release) == sorted(REQUIRED_KEYS)
+    save_checkpoint(tmp_path / "ship.pt", release)
+    assert "train_state" not in load_checkpoint(tmp_path / "ship.pt", expected_config="tiny")

@@ -110,7 +110,8 @@ def test_registered_config_sizes():
     with torch.device("meta"):
         paper = count_parameters(BinaryTTCNet(CONFIGS["paper"]))
         small = count_parameters(BinaryTTCNet(CONFIGS["cpu-small"]))
+        gc = count_parameters(BinaryTTCNet(CONFIGS["cpu-small-gc"]))
         tiny = count_parameters(BinaryTTCNet(CONFIGS["tiny"]))
     assert 88e6 < paper < 94e6  # "about 91 M"
-    assert tiny < small < 2e6
+    assert tiny < small < gc < 2e6  # cpu-small-gc = cpu-small + the global-context block
     assert CONFIGS["paper"].norm == "none" and CONFIGS["cpu-small"].norm != "none"

@@ -71,8 +71,9 @@ def evaluate(estimator, dataset, limit: int | None) -> dict:
         prob = estimator.geofence(s["image_prev"], s["image_latest"], acc.thresholds_s)
         eta_hat = estimator.motion_in_depth(s["image_prev"], s["image_latest"])
         latency = (time.perf_counter() - t0) * 1e3
+        speed = s.get("ego_speed_mps")
         acc.add(prob, eta_hat, s["eta"].numpy(), s["valid"].numpy().astype(bool),
-                s["instance"].numpy(), latency_ms=latency)
+                s["instance"].numpy(), latency_ms=latency, ego_speed_mps=None if speed is None else float(speed))
     result = acc.result()
     result["pairs"] = n
     result["miou_thresholds_s"] = [float(threshold_key(t)) for t in acc.miou_thresholds_s]
@@ -93,6 +94,11 @@ def format_table(r: dict) -> str:
         for label, g in b["by_inside_share"].items():
             lines.append(f"  {label:>8}: {g['pairs']:>6} pairs, mIoU {g['miou']:.3f}, inside-class IoU "
                          f"{g['inside_iou']:.3f} over {g['pairs_with_inside_union']} pairs")
+        if "by_ego_speed_mps" in b:
+            lines.append("images by ego speed [m/s]: mIoU, static pixels at tau = 1 s false inside / missed:")
+            for label, g in b["by_ego_speed_mps"].items():
+                lines.append(f"  {label:>8}: {g['images']:>6} images, mIoU {g['miou']:.3f}, "
+                             f"{g['static_false_inside_1s']:.3f} / {g['static_missed_1s']:.3f}")
     return "\n".join(lines)
 
 

@@ -27,7 +27,8 @@ def add_parser(sub) -> argparse.ArgumentParser:
     p.add_argument("--config", required=True, help="model config name (paper, cpu-small, tiny)")
     p.add_argument("--out", required=True, help="best checkpoint path, *.pt")
     p.add_argument("--resume", action="store_true", help="continue from <stem>.last.pt")
-    p.add_argument("--init", default=None, help="start from the weights of this checkpoint (same config)")
+    p.add_argument("--init", default=None, help="start from the weights of this checkpoint (same config, or the config "
+                   "without the global-context block: the block then starts as the identity)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--steps", type=int, default=2000, help="optimiser steps per stage (default 2000)")
     p.add_argument("--batch-size", type=int, default=8)
@@ -93,7 +94,7 @@ def run(args) -> int:
     _check(args)
     import torch
 
-    from bittc_core.checkpoint import build_network, load_checkpoint, pick_device
+    from bittc_core.checkpoint import init_network, load_checkpoint, pick_device
     from bittc_core.model import BinaryTTCNet, get_config
     from bittc_core.train import STAGES, RunPaths, TrainConfig, Trainer
     from bittc_core.train.data import open_split
@@ -111,7 +112,7 @@ def run(args) -> int:
     device = pick_device(args.device)
     torch.manual_seed(args.seed)
     if args.init:
-        net = build_network(load_checkpoint(args.init, map_location="cpu", expected_config=args.config))
+        net = init_network(args.init, args.config)
     else:
         net = BinaryTTCNet(get_config(args.config))
     train_set = open_split(args.data, "train", augment=True, seed=args.seed)

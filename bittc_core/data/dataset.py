@@ -10,6 +10,7 @@ Each item is one frame pair (by default the last pair of the clip), as a dict:
     instance                  int64   (H, W)   -1 sky, 0 static, > 0 vehicle
     dt_s                      float32 ()       frame interval [s]
     intrinsics                float32 (4,)     fx, fy, cx, cy [px]
+    ego_speed_mps             float32 ()       ego speed at the latest frame [m/s]
 
 Augmentations that keep TTC valid (``augment=True``): horizontal flip (flow u and the
 principal point flip with the image; eta and tau are unchanged), photometric changes
@@ -100,4 +101,5 @@ class TTCDataset(Dataset):
             "instance": torch.from_numpy(np.ascontiguousarray(inst, np.int64)),
             "dt_s": torch.tensor(float(meta["dt_s"]), dtype=torch.float32),
             "intrinsics": torch.from_numpy(K.astype(np.float32)),
+            "ego_speed_mps": torch.tensor(float(meta["frames"][j + 1]["ego"]["speed_mps"]), dtype=torch.float32),
         }

@@ -34,6 +34,7 @@ class ModelConfig:
     dec_channels: tuple[int, ...] = (1024, 512, 256, 128, 64)  # coarse to fine
     full_res_skip: bool = True  # last decoder block also sees the input volume
     pad_factor: float = 1.5  # features are zero-padded to this multiple of their size
+    global_context: bool = False  # pooled bottleneck summary added back (not in the paper)
     # SegRefineNet (guided by the reference image)
     guide_channels: int = 16
     refine_channels: int = 8
@@ -91,26 +92,31 @@ class ModelConfig:
 #: ``cpu-small``: the CPU default (slim extractor, narrow 4-level SegNet, batch norm,
 #: one hidden refine layer), tuned with ``bittc bench`` on 2 cores at 96x288: ~10 ms for
 #: one threshold in streaming mode, ~3 ms per extra threshold.
+#: ``cpu-small-gc``: ``cpu-small`` plus the global-context block at the SegNet bottleneck
+#: (an experiment: the static ground's tau = Z / v_ego hangs on one speed for the whole
+#: image; see the README for what it measured).
 #: ``tiny``: unit tests only.
+_CPU_SMALL = ModelConfig(
+    stem_channels=16,
+    feat_channels=16,
+    feat_res_blocks=2,
+    spp_pool_sizes=(8, 4, 2),
+    spp_channels=8,
+    enc_channels=(16, 32, 48, 64),
+    dec_channels=(48, 32, 16, 16),
+    full_res_skip=False,
+    guide_channels=8,
+    refine_channels=8,
+    refine_layers=1,
+    cont_channels=16,
+    cont_dilations=(1, 2, 4, 1),
+    cont_refine_levels=True,
+    norm="batch",
+)
 CONFIGS: dict[str, ModelConfig] = {
     "paper": ModelConfig(),
-    "cpu-small": ModelConfig(
-        stem_channels=16,
-        feat_channels=16,
-        feat_res_blocks=2,
-        spp_pool_sizes=(8, 4, 2),
-        spp_channels=8,
-        enc_channels=(16, 32, 48, 64),
-        dec_channels=(48, 32, 16, 16),
-        full_res_skip=False,
-        guide_channels=8,
-        refine_channels=8,
-        refine_layers=1,
-        cont_channels=16,
-        cont_dilations=(1, 2, 4, 1),
-        cont_refine_levels=True,
-        norm="batch",
-    ),
+    "cpu-small": _CPU_SMALL,
+    "cpu-small-gc": dataclasses.replace(_CPU_SMALL, global_context=True),
     "tiny": ModelConfig(
         stem_channels=8,
         feat_channels=8,

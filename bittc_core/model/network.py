@@ -70,6 +70,7 @@ class BinaryTTCNet(nn.Module):
         self.segnet = SegNet2D(
             feat_channels=c.feat_channels, enc_channels=c.enc_channels,
             dec_channels=c.dec_channels, full_res_skip=c.full_res_skip, norm=c.norm,
+            global_context=c.global_context,
         )
         self.refine = SegRefineNet(guide_channels=c.guide_channels,
                                    channels=c.refine_channels, layers=c.refine_layers)

@@ -10,6 +10,14 @@ convs over the parts, conv([a, b]) = conv_a(a) + conv_b(b). The reference part o
 first encoder conv (and of the full-resolution skip conv) does not depend on the
 hypothesis, so ``prepare`` computes it once per frame pair and ``forward`` adds it to
 the warped part of every hypothesis (broadcast, no copy).
+
+Global context (``global_context``, not in the paper): the bottleneck map of each
+hypothesis is averaged over the padded map, passed through two 1x1 convs and added
+back at every position. The idea: a local decision cannot tell a textureless road of a
+standing ego (tau = inf) from one of a moving ego (tau = Z / v_ego), the average could
+carry what the whole image says. The second conv starts at zero, so the block starts as
+the identity and can be added to a trained network (``checkpoint.init_network``).
+Added to the trained ``cpu-small`` and fine-tuned, it was not measurably used (README).
 """
 
 from __future__ import annotations
@@ -17,6 +25,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import torch
+import torch.nn.functional as F
 from torch import nn
 
 from bittc_core.model.layers import LEAKY_SLOPE, ConvNormAct, NormAct, conv, make_norm
@@ -69,9 +78,26 @@ def _broadcast_add(ref: torch.Tensor, per_hyp: torch.Tensor) -> torch.Tensor:
     return out.view(b * k, *per_hyp.shape[1:])
 
 
+class GlobalContext(nn.Module):
+    """x (N, C, h, w) -> x + expand(LeakyReLU(reduce(mean_hw(x)))), identity at init."""
+
+    def __init__(self, channels: int) -> None:
+        super().__init__()
+        hidden = max(channels // 2, 4)
+        self.reduce = nn.Conv2d(channels, hidden, 1)
+        self.expand = nn.Conv2d(hidden, channels, 1)
+        nn.init.zeros_(self.expand.weight)
+        nn.init.zeros_(self.expand.bias)
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        g = F.leaky_relu(self.reduce(x.mean(dim=(2, 3), keepdim=True)), LEAKY_SLOPE)
+        return x + self.expand(g)
+
+
 class SegNet2D(nn.Module):
     def __init__(self, *, feat_channels: int, enc_channels: tuple[int, ...],
-                 dec_channels: tuple[int, ...], full_res_skip: bool, norm: str) -> None:
+                 dec_channels: tuple[int, ...], full_res_skip: bool, norm: str,
+                 global_context: bool = False) -> None:
         super().__init__()
         e, d = enc_channels, dec_channels
         levels = len(e)
@@ -85,6 +111,7 @@ class SegNet2D(nn.Module):
                           ConvNormAct(e[i], e[i], norm=norm))
             for i in range(1, levels)
         )
+        self.context = GlobalContext(e[-1]) if global_context else None
         self.up = nn.ModuleList()
         self.fuse = nn.ModuleList()
         prev = e[-1]
@@ -122,6 +149,8 @@ class SegNet2D(nn.Module):
         for block in self.down:
             skips.append(block(skips[-1]))
         x = skips.pop()
+        if self.context is not None:
+            x = self.context(x)
         for i, up in enumerate(self.up):
             x = up(x)
             if i < len(self.fuse):

@@ -1,0 +1,39 @@
+"""Write a copy of a checkpoint with one residual branch's last layer zeroed (an ablation).
+
+Two branches of the network add a residual through a last layer that starts at zero, so
+zeroing it removes the branch and leaves everything else unchanged:
+
+* ``cont_refine.out``: ContRefineNet's residual on log(eta_auc); the copy's continuous
+  output is the AUC of the stacked maps alone (paper Eq. 12);
+* ``segnet.context.expand``: the global-context block of ``cpu-small-gc``.
+
+Evaluating the copy beside the original measures what the branch adds:
+
+    python docs/zero_layer.py bittc_core/weights/bittc_default.pt runs/auc_only.pt cont_refine.out
+    bittc eval --data data/bittc_v1 --method bittc --weights runs/auc_only.pt --split test
+"""
+
+import sys
+
+from bittc_core.checkpoint import CheckpointError, load_checkpoint, release_payload, save_checkpoint
+
+
+def main(src: str, dst: str, layer: str) -> None:
+    ckpt = release_payload(load_checkpoint(src, map_location="cpu"))
+    keys = [f"{layer}.weight", f"{layer}.bias"]
+    missing = [k for k in keys if k not in ckpt["state_dict"]]
+    if missing:
+        raise CheckpointError(f"checkpoint {src!r} ({ckpt['config_name']!r}) has no layer {layer!r} (no {missing})")
+    for key in keys:
+        ckpt["state_dict"][key].zero_()
+    save_checkpoint(dst, ckpt)
+    print(f"wrote {dst} ({layer} zeroed)")
+
+
+if __name__ == "__main__":
+    if len(sys.argv) != 4:
+        sys.exit("usage: python docs/zero_layer.py SRC.pt DST.pt LAYER   (LAYER: cont_refine.out or segnet.context.expand)")
+    try:
+        main(*sys.argv[1:])
+    except CheckpointError as err:
+        sys.exit(f"zero_layer: {err}")
