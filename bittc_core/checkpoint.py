@@ -82,20 +82,24 @@ def load_checkpoint(path: str | os.PathLike, map_location: str | torch.device = 
                               f"bittc checkpoint ({type(err).__name__}: {err})") from None
     if not isinstance(ckpt, dict) or any(k not in ckpt for k in REQUIRED_KEYS):
         raise CheckpointError(f"checkpoint {str(path)!r} lacks the keys {list(REQUIRED_KEYS)}")
-    name = ckpt["config_name"]
     try:
-        config = ModelConfig.from_dict(ckpt["config"])
+        ckpt["model_config"] = ModelConfig.from_dict(ckpt["config"])
     except (TypeError, ValueError) as err:
         raise CheckpointError(f"checkpoint {str(path)!r} has an invalid config: {err}") from None
     if expected_config is not None:
-        if name != expected_config:
-            raise CheckpointError(f"checkpoint {str(path)!r} is of config {name!r}, "
-                                  f"not {expected_config!r}")
-        if expected_config in CONFIGS and CONFIGS[expected_config] != config:
-            raise CheckpointError(f"checkpoint {str(path)!r} says config {name!r} but its "
-                                  "sizes differ from the registered ones")
-    ckpt["model_config"] = config
+        _check_config(ckpt, path, expected_config)
     return ckpt
+
+
+def _check_config(ckpt: dict, path: str | os.PathLike, expected_config: str) -> None:
+    """A loaded checkpoint is of registry config ``expected_config``, by name and sizes."""
+    name = ckpt["config_name"]
+    if name != expected_config:
+        raise CheckpointError(f"checkpoint {str(path)!r} is of config {name!r}, "
+                              f"not {expected_config!r}")
+    if expected_config in CONFIGS and CONFIGS[expected_config] != ckpt["model_config"]:
+        raise CheckpointError(f"checkpoint {str(path)!r} says config {name!r} but its "
+                              "sizes differ from the registered ones")
 
 
 def build_network(ckpt: dict) -> BinaryTTCNet:
@@ -117,19 +121,20 @@ def init_network(path: str | os.PathLike, config_name: str) -> BinaryTTCNet:
     initialisation, the identity, so the network computes what the checkpoint did.
     """
     ckpt = load_checkpoint(path, map_location="cpu")
-    target = get_config(config_name)
-    source = ckpt["model_config"]
-    if source == target:
+    name, source, target = ckpt["config_name"], ckpt["model_config"], get_config(config_name)
+    if name == config_name:
+        _check_config(ckpt, path, config_name)
         return build_network(ckpt)
-    if source.global_context or dataclasses.replace(source, global_context=True) != target:
-        raise CheckpointError(f"--init {str(path)!r}: its config ({ckpt['config_name']!r}) is neither "
+    if (CONFIGS.get(name) != source or source.global_context
+            or dataclasses.replace(source, global_context=True) != target):
+        raise CheckpointError(f"--init {str(path)!r}: its config ({name!r}) is neither "
                               f"{config_name!r} nor {config_name!r} without the global-context block")
     net = BinaryTTCNet(target)
     missing, unexpected = net.load_state_dict(ckpt["state_dict"], strict=False)
-    added = [k for k in missing if ".context." not in k]
+    added = set(missing) - {f"segnet.context.{k}" for k in net.segnet.context.state_dict()}
     if added or unexpected:
         raise CheckpointError(f"--init {str(path)!r}: weights do not fit config {config_name!r} "
-                              f"(missing {added}, unexpected {unexpected})")
+                              f"(missing {sorted(added)}, unexpected {unexpected})")
     return net
 
 

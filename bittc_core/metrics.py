@@ -87,6 +87,12 @@ def inside_share_group(inside_px: int, valid_px: int) -> str:
     return INSIDE_SHARE_LABELS[1 + int(np.searchsorted(INSIDE_SHARE_EDGES, share, side="right"))]
 
 
+def image_miou(ious: list[float]) -> float | None:
+    """An image's mIoU: the mean over its thresholds with a finite IoU; None if none."""
+    finite = [x for x in ious if np.isfinite(x)]
+    return float(np.mean(finite)) if finite else None
+
+
 def mid_terms(eta_hat: np.ndarray, eta: np.ndarray, valid: np.ndarray) -> tuple[float, int]:
     """(sum of |log eta_hat - log eta|, pixel count) over the MiD pixels."""
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -151,15 +157,16 @@ class MetricAccumulator:
             self._errors[t][1] += int(valid.sum())
             if t in self._actor:
                 self._actor[t] += class_counts(pred[n + j], truth, actors)
+            if t == STATIC_ERROR_TAU_S:
+                static_pred, static_truth = pred[n + j], truth
         if ego_speed_mps is not None:
             group = self._by_speed[EGO_SPEED_LABELS[int(np.searchsorted(EGO_SPEED_EDGES_MPS, ego_speed_mps, side="right"))]]
-            finite = [x for x in ious if np.isfinite(x)]
-            if finite:
-                group[0].append(float(np.mean(finite)))
+            miou = image_miou(ious)
+            if miou is not None:
+                group[0].append(miou)
             static = valid & (instance == 0)
-            truth = inside_geofence(eta, tau_to_eta(STATIC_ERROR_TAU_S, self.dt_s))
-            p = pred[n + ERROR_RATE_TAUS_S.index(STATIC_ERROR_TAU_S)]
-            group[1] += [np.sum(p & ~truth & static), np.sum(~p & truth & static), np.sum(static)]
+            group[1] += [np.sum(static_pred & ~static_truth & static), np.sum(~static_pred & static_truth & static),
+                         np.sum(static)]
         if eta_hat is not None:  # valid = actor + static pixels, the MiD sums their parts
             for part, mask in (("actor", actors), ("static", valid & ~actors)):
                 s, c = mid_terms(eta_hat, eta, mask)
@@ -171,7 +178,7 @@ class MetricAccumulator:
     def result(self) -> dict:
         nan = float("nan")
         # per image: the mean IoU over the thresholds with a finite IoU; images with none skipped
-        per_image = [float(np.mean(f)) for f in ([x for x in row if np.isfinite(x)] for row in self._iou_by_threshold) if f]
+        per_image = [m for m in map(image_miou, self._iou_by_threshold) if m is not None]
         mid_sum, mid_count = (sum(v) for v in zip(*self._mid_parts.values()))
         return {
             "miou": float(np.mean(per_image)) if per_image else nan,

@@ -88,6 +88,12 @@ def test_init_refuses_other_configs(tmp_path):
     with pytest.raises(CheckpointError, match="neither 'cpu-small'"):
         init_network(path, "cpu-small")
     assert init_network(path, "cpu-small-gc").config == get_config("cpu-small-gc")
+    # the sizes of cpu-small under another name: refused, as by load_checkpoint's expected_config
+    save_checkpoint(path, make_payload(BinaryTTCNet(get_config("cpu-small")), "mine", {}))
+    with pytest.raises(CheckpointError, match="'mine'"):
+        init_network(path, "cpu-small")
+    with pytest.raises(CheckpointError, match="'mine'"):
+        init_network(path, "cpu-small-gc")
 
 
 def test_release_payload_drops_training_state(tmp_path):
