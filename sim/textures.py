@@ -3,6 +3,14 @@
 TinyRenderer has no mip-mapping: texture detail finer than a screen pixel turns into
 noise that differs between frames. The textures here are therefore smooth noise
 (a few octaves, most energy at low frequency) rather than white noise.
+
+Ground styles (``TextureBank(ground=...)``):
+    ``"detailed"`` (default): asphalt and grass carry broadband noise plus anti-aliased
+    patches 0.3-2 m across (repairs, stains, clumps), so the ground's own motion can be
+    measured between frames, as on a real road. At 10 m ahead a 96 x 288 px camera sees
+    about 0.4 m of road per image row, at 5 m about 0.1 m.
+    ``"smooth"``: the textures of dataset version bittc_v1 (most energy at 5 m scale;
+    the ground looks nearly uniform, so its motion is hard to measure).
 """
 
 from __future__ import annotations
@@ -16,13 +24,21 @@ import numpy as np
 TEXTURE_SIZE_PX = 128
 
 
-def smooth_noise(rng: np.random.Generator, size_px: int = TEXTURE_SIZE_PX, octaves: int = 5) -> np.ndarray:
-    """(size, size) float32 noise in [0, 1], octaves of cubic-upsampled random grids."""
+GROUND_TEXTURE_SIZE_PX = 256  # a 20 m road tile: 8 cm per texel along the road
+GROUND_STYLES = ("detailed", "smooth")
+
+
+def smooth_noise(rng: np.random.Generator, size_px: int = TEXTURE_SIZE_PX, octaves: int = 5,
+                 first_cells: int = 4, decay: float = 0.7) -> np.ndarray:  # fmt: skip
+    """(size, size) float32 noise in [0, 1], octaves of cubic-upsampled random grids.
+
+    Octave k has ``first_cells * 2**k`` cells per side and amplitude ``decay**k``.
+    """
     out = np.zeros((size_px, size_px), np.float32)
     total = 0.0
     for k in range(octaves):
-        cells = 2 ** (k + 2)
-        amp = 0.7**k
+        cells = first_cells * 2**k
+        amp = decay**k
         grid = rng.random((cells, cells), dtype=np.float32)
         out += amp * cv2.resize(grid, (size_px, size_px), interpolation=cv2.INTER_CUBIC)
         total += amp
@@ -42,6 +58,30 @@ def tinted(rng: np.random.Generator, rgb: tuple[float, float, float], contrast: 
 def asphalt(rng: np.random.Generator) -> np.ndarray:
     grey = rng.uniform(0.25, 0.45)
     return tinted(rng, (grey, grey, grey * 1.02), contrast=1.1)
+
+
+def patches(rng: np.random.Generator, size_px: int, count: int, radius_px: tuple[float, float]) -> np.ndarray:
+    """(size, size) float32 in [-1, 1]: ``count`` filled ellipses of random sign and
+    strength, drawn at 4x and area-averaged so their edges are anti-aliased."""
+    k = 4
+    canvas = np.zeros((size_px * k, size_px * k), np.float32)
+    for _ in range(count):
+        centre = (int(rng.integers(size_px * k)), int(rng.integers(size_px * k)))
+        axes = tuple(int(a * k) for a in rng.uniform(*radius_px, size=2))
+        value = float(rng.choice([-1.0, 1.0]) * rng.uniform(0.4, 1.0))
+        cv2.ellipse(canvas, centre, axes, float(rng.uniform(0, 180)), 0, 360, value, -1, cv2.LINE_AA)
+    return np.clip(cv2.resize(canvas, (size_px, size_px), interpolation=cv2.INTER_AREA), -1.0, 1.0)
+
+
+def detailed_ground(rng: np.random.Generator, rgb: tuple[float, float, float], noise_contrast: float,
+                    patch_contrast: float, count: int) -> np.ndarray:  # fmt: skip
+    """(256, 256, 3) uint8 ground: broadband noise (2.5 m to 0.3 m cells on a 20 m
+    tile, flat spectrum) plus ``count`` patches 1-12 texels in radius."""
+    s = GROUND_TEXTURE_SIZE_PX
+    n = smooth_noise(rng, s, octaves=4, first_cells=8, decay=0.85) - 0.5
+    shade = 1.0 + noise_contrast * n + patch_contrast * patches(rng, s, count, (1.0, 6.0))
+    img = np.asarray(rgb, np.float32)[None, None, :] * shade[..., None]
+    return np.clip(img * 255.0, 0, 255).astype(np.uint8)
 
 
 def vehicle_paint(rng: np.random.Generator, rgb: tuple[float, float, float]) -> np.ndarray:
@@ -99,8 +139,11 @@ class TextureBank:
     fresh textures, which keeps building a world cheap when many are built in a row.
     """
 
-    def __init__(self, seed: int, directory: Path):
+    def __init__(self, seed: int, directory: Path, ground: str = "detailed"):
+        if ground not in GROUND_STYLES:
+            raise ValueError(f"ground texture style {ground!r}: must be one of {GROUND_STYLES}")
         self.seed = seed
+        self.ground = ground
         self.dir = Path(directory)
         self.dir.mkdir(parents=True, exist_ok=True)
 
@@ -108,19 +151,24 @@ class TextureBank:
         if kind not in TEXTURE_KINDS:
             raise ValueError(f"unknown texture kind {kind!r}")
         variant %= VARIANTS
-        p = self.dir / f"{kind}_{palette_index}_{variant}.png"
+        p = self.dir / f"{self.ground}_{kind}_{palette_index}_{variant}.png"
         if not p.exists():
             rng = np.random.default_rng([self.seed, TEXTURE_KINDS.index(kind), palette_index, variant])
-            img = _draw(kind, rng, palette_index)
+            img = _draw(kind, rng, palette_index, self.ground)
             tmp = p.with_name(f".{p.name}.{os.getpid()}.tmp.png")
             cv2.imwrite(str(tmp), cv2.cvtColor(img, cv2.COLOR_RGB2BGR))
             os.replace(tmp, p)
         return p
 
 
-def _draw(kind: str, rng: np.random.Generator, palette_index: int) -> np.ndarray:
+def _draw(kind: str, rng: np.random.Generator, palette_index: int, ground: str) -> np.ndarray:
     from sim.vehicles import PALETTE
 
+    if ground == "detailed" and kind == "asphalt":
+        grey = rng.uniform(0.28, 0.45)
+        return detailed_ground(rng, (grey, grey, grey * 1.02), noise_contrast=1.0, patch_contrast=0.6, count=700)
+    if ground == "detailed" and kind == "grass":
+        return detailed_ground(rng, (0.3, 0.45, 0.2), noise_contrast=1.0, patch_contrast=0.6, count=700)
     if kind == "asphalt":
         return asphalt(rng)
     if kind == "grass":

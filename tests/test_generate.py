@@ -122,6 +122,7 @@ def test_dataset_tensors_have_documented_shapes_and_flip_consistently(tmp_path):
         (["--samples", "2", "--seed", "1", "--backend", "spark"], "--backend 'spark'"),
         (["--samples", "2", "--seed", "1", "--workers", "0"], "--workers 0"),
         (["--samples", "2", "--seed", "1", "--clip-length", "1"], "--clip-length 1"),
+        (["--samples", "2", "--seed", "1", "--ground-texture", "gravel"], "--ground-texture 'gravel'"),
     ],
 )
 def test_bad_generate_flags(tmp_path, capsys, argv, needle):
@@ -141,6 +142,19 @@ def test_foreign_or_mismatched_dir_is_refused(tmp_path, capsys):
     generate(ds, SMALL, "train", 1, workers=1, backend="local", progress=False)
     assert main(["generate", "--out", str(ds), "--samples", "1", "--seed", "4", "--size", "48x144", "--no-progress"]) == 2
     assert "seed = 3" in capsys.readouterr().err
+
+
+def test_datasets_made_before_the_ground_option_count_as_smooth(tmp_path, capsys):
+    ds = tmp_path / "ds"
+    old = GenerationConfig(seed=3, height_px=48, width_px=144, ground_texture="smooth")
+    generate(ds, old, "train", 1, workers=1, backend="local", progress=False)
+    gen = ds / "generation.yaml"
+    gen.write_text("".join(line for line in gen.read_text().splitlines(True) if not line.startswith("ground_texture")))
+    common = ["generate", "--out", str(ds), "--samples", "2", "--seed", "3", "--size", "48x144", "--no-progress"]
+    assert main(common) == 2  # the default is now the detailed ground
+    assert "ground_texture = 'smooth'" in capsys.readouterr().err
+    assert main([*common, "--ground-texture", "smooth"]) == 0
+    assert (ds / "train" / "000001" / "meta.json").exists()
 
 
 def test_ray_missing_gives_a_clear_error(tmp_path, capsys, monkeypatch):
