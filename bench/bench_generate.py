@@ -1,6 +1,6 @@
 """Data-generation throughput, measured in one run: 1 worker, 2 workers, Ray vs local.
 
-Usage: python bench/bench_generate.py [--samples N] [--size HxW]
+Usage: python bench/bench_generate.py [--samples N] [--size HxW] [--ground-texture detailed|smooth]
 Prints samples/s per worker at the given size (target >= 20 per core at 96x288), the
 2-worker / 1-worker ratio (target >= 1.7 on 2 cores) and Ray / local with the same
 worker count (target: Ray within 15 %). Each figure is the steady-state rate of one
@@ -36,10 +36,11 @@ def main() -> None:
     ap.add_argument("--samples", type=int, default=200)
     ap.add_argument("--size", default="96x288")
     ap.add_argument("--no-ray", action="store_true")
+    ap.add_argument("--ground-texture", default="detailed", help="detailed (default) or smooth")
     args = ap.parse_args()
     h, w = (int(v) for v in args.size.split("x"))
-    cfg = GenerationConfig(seed=123, height_px=h, width_px=w)
-    print(f"{os.cpu_count()} cores, {h}x{w}, steady state of runs of {args.samples} samples")
+    cfg = GenerationConfig(seed=123, height_px=h, width_px=w, ground_texture=args.ground_texture)
+    print(f"{os.cpu_count()} cores, {h}x{w}, {args.ground_texture} ground, steady state of runs of {args.samples} samples")
     one = timed(cfg, args.samples, 1, "local")
     print(f"local, 1 worker : {one:6.2f} samples/s  ({one:.2f} per worker; target >= 20 per core)")
     two = timed(cfg, args.samples, 2, "local")

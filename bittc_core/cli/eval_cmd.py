@@ -81,6 +81,8 @@ def evaluate(estimator, dataset, limit: int | None) -> dict:
 
 
 def format_table(r: dict) -> str:
+    from bittc_core.metrics import STATIC_ERROR_TAU_S
+
     lines = [f"{'metric':<22} {'value':>10}", f"{'mIoU (0.2-2 s)':<22} {r['miou']:>10.4f}",
              f"{'MiD (x1e4)':<22} {r['mid']:>10.1f}"]
     lines += [f"{'error rate tau=' + k + ' s':<22} {v:>10.4f}" for k, v in r["error_rate"].items()]
@@ -95,10 +97,11 @@ def format_table(r: dict) -> str:
             lines.append(f"  {label:>8}: {g['pairs']:>6} pairs, mIoU {g['miou']:.3f}, inside-class IoU "
                          f"{g['inside_iou']:.3f} over {g['pairs_with_inside_union']} pairs")
         if "by_ego_speed_mps" in b:
-            lines.append("images by ego speed [m/s]: mIoU, static pixels at tau = 1 s false inside / missed:")
+            key = f"{STATIC_ERROR_TAU_S:g}s"
+            lines.append(f"images by ego speed [m/s]: mIoU, static pixels at tau = {STATIC_ERROR_TAU_S:g} s false inside / missed:")
             for label, g in b["by_ego_speed_mps"].items():
                 lines.append(f"  {label:>8}: {g['images']:>6} images, mIoU {g['miou']:.3f}, "
-                             f"{g['static_false_inside_1s']:.3f} / {g['static_missed_1s']:.3f}")
+                             f"{g['static_false_inside_' + key]:.3f} / {g['static_missed_' + key]:.3f}")
     return "\n".join(lines)
 
 
