@@ -6,7 +6,7 @@ noise that differs between frames. The textures here are therefore smooth noise
 
 Ground styles (``TextureBank(ground=...)``):
     ``"detailed"`` (default): asphalt and grass carry broadband noise plus anti-aliased
-    patches 0.3-2 m across (repairs, stains, clumps), so the ground's own motion can be
+    patches 0.15-1.5 m across (repairs, stains, clumps), so the ground's own motion can be
     measured between frames, as on a real road. At 10 m ahead a 96 x 288 px camera sees
     about 0.4 m of road per image row, at 5 m about 0.1 m.
     ``"smooth"``: the textures of dataset version bittc_v1 (most energy at 5 m scale;
@@ -76,7 +76,7 @@ def patches(rng: np.random.Generator, size_px: int, count: int, radius_px: tuple
 def detailed_ground(rng: np.random.Generator, rgb: tuple[float, float, float], noise_contrast: float,
                     patch_contrast: float, count: int) -> np.ndarray:  # fmt: skip
     """(256, 256, 3) uint8 ground: broadband noise (2.5 m to 0.3 m cells on a 20 m
-    tile, flat spectrum) plus ``count`` patches 1-12 texels in radius."""
+    tile, flat spectrum) plus ``count`` patches 1-6 texels in radius."""
     s = GROUND_TEXTURE_SIZE_PX
     n = smooth_noise(rng, s, octaves=4, first_cells=8, decay=0.85) - 0.5
     shade = 1.0 + noise_contrast * n + patch_contrast * patches(rng, s, count, (1.0, 6.0))

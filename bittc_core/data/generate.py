@@ -145,6 +145,8 @@ def prepare_dir(out: Path, cfg: GenerationConfig) -> None:
             old = yaml.safe_load(gen.read_text())
         except yaml.YAMLError:
             raise CliError(f"{gen}: malformed YAML; remove the folder or choose another --out") from None
+        if not isinstance(old, dict):
+            raise CliError(f"{gen}: not a mapping of generation settings; remove the folder or choose another --out")
         old.setdefault("ground_texture", "smooth")  # datasets made before the option had the smooth ground
         mine = asdict(cfg)
         for k in sorted(set(old) | set(mine)):
