@@ -73,8 +73,8 @@ def patches(rng: np.random.Generator, size_px: int, count: int, radius_px: tuple
     return np.clip(cv2.resize(canvas, (size_px, size_px), interpolation=cv2.INTER_AREA), -1.0, 1.0)
 
 
-def detailed_ground(rng: np.random.Generator, rgb: tuple[float, float, float], noise_contrast: float,
-                    patch_contrast: float, count: int) -> np.ndarray:  # fmt: skip
+def detailed_ground(rng: np.random.Generator, rgb: tuple[float, float, float], noise_contrast: float = 1.0,
+                    patch_contrast: float = 0.6, count: int = 700) -> np.ndarray:  # fmt: skip
     """(256, 256, 3) uint8 ground: broadband noise (2.5 m to 0.3 m cells on a 20 m
     tile, flat spectrum) plus ``count`` patches 1-6 texels in radius."""
     s = GROUND_TEXTURE_SIZE_PX
@@ -166,9 +166,9 @@ def _draw(kind: str, rng: np.random.Generator, palette_index: int, ground: str) 
 
     if ground == "detailed" and kind == "asphalt":
         grey = rng.uniform(0.28, 0.45)
-        return detailed_ground(rng, (grey, grey, grey * 1.02), noise_contrast=1.0, patch_contrast=0.6, count=700)
+        return detailed_ground(rng, (grey, grey, grey * 1.02))
     if ground == "detailed" and kind == "grass":
-        return detailed_ground(rng, (0.3, 0.45, 0.2), noise_contrast=1.0, patch_contrast=0.6, count=700)
+        return detailed_ground(rng, (0.3, 0.45, 0.2))
     if kind == "asphalt":
         return asphalt(rng)
     if kind == "grass":
