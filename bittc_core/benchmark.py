@@ -6,7 +6,8 @@ for one feature extraction plus the hypotheses. Reported: median wall time [ms] 
 call for K thresholds (binary: ``geofence``; continuous: ``continuous``, which stacks
 ``cont_levels`` maps), and for the binary case the cost of each extra threshold
 relative to the one-threshold cost, (t_K - t_1) / ((K - 1) t_1), per K and from the
-least-squares slope of t_K over K.
+least-squares slope of t_K over K. Flip averaging (``tta="flip"``: plain and mirrored
+frames, see ``bittc_core.estimator.network``) is timed at K = 1 and in continuous mode.
 
 Interleaved rounds: every setting has its own estimator (its own frame cache, the
 network shared) and round j times call j of every setting in turn (the order rotated each round), so a slow spell of
@@ -93,13 +94,18 @@ def run_benchmark(s: BenchSettings = BenchSettings(), weights: str | None = None
     print(f"config {s.config}: {count_parameters(est.net) / 1e6:.3f} M params, "
           f"{s.height_px}x{s.width_px} px, {torch.get_num_threads()} threads, streaming")
 
-    def geofence(k: int):
-        e, thr = BittcEstimator(est.net, device=est.device), taus(k)  # own cache, shared net
+    def estimator(tta: str = "none") -> BittcEstimator:
+        return BittcEstimator(est.net, device=est.device, tta=tta)  # own cache, shared net
+
+    def geofence(k: int, tta: str = "none"):
+        e, thr = estimator(tta), taus(k)
         return lambda a, b: e.geofence(a, b, thr)
 
     flow, flow_cont = FlowEstimator(), FlowEstimator()
     calls = {k: geofence(k) for k in s.thresholds}
-    calls["continuous"] = BittcEstimator(est.net, device=est.device).continuous
+    calls["continuous"] = estimator().continuous
+    calls["flip_1"] = geofence(1, "flip")
+    calls["flip_continuous"] = estimator("flip").continuous
     calls["flow_geofence"] = lambda a, b: flow.geofence(a, b, [1.0, 2.0])
     calls["flow_continuous"] = flow_cont.continuous
     ms = _interleaved_median_ms(calls, frames, s.warmup)
@@ -111,8 +117,11 @@ def run_benchmark(s: BenchSettings = BenchSettings(), weights: str | None = None
         print(f"{k:>4} {t:>10.2f} {ratios.get(k, float('nan')):>10.3f}")
     print(f"extra threshold, least-squares slope over K: {slope_ratio:.3f} of one threshold")
     print(f"continuous ({cfg.cont_levels} maps + AUC + ContRefineNet): {ms['continuous']:.2f} ms")
+    print(f"flip-averaged (tta flip): one threshold {ms['flip_1']:.2f} ms ({ms['flip_1'] / binary[1]:.2f}x), "
+          f"continuous {ms['flip_continuous']:.2f} ms ({ms['flip_continuous'] / ms['continuous']:.2f}x)")
     print(f"flow baseline (DIS {flow.config.preset} + affine): geofence {ms['flow_geofence']:.2f} ms, "
           f"continuous {ms['flow_continuous']:.2f} ms")
     return {"binary_ms": binary, "extra_over_one": ratios, "extra_over_one_slope": slope_ratio,
-            "continuous_ms": ms["continuous"], "flow_geofence_ms": ms["flow_geofence"],
+            "continuous_ms": ms["continuous"], "flip_one_threshold_ms": ms["flip_1"],
+            "flip_continuous_ms": ms["flip_continuous"], "flow_geofence_ms": ms["flow_geofence"],
             "flow_continuous_ms": ms["flow_continuous"]}

@@ -92,6 +92,45 @@ def test_continuous_is_ttc_of_motion_in_depth(est):
     np.testing.assert_allclose(tau, 0.1 * eta / (1 - eta), rtol=1e-4)
 
 
+def _logit(p):
+    return np.log(p) - np.log1p(-p)
+
+
+def test_flip_averaging_is_the_mean_of_both_views_and_mirror_symmetric(est):
+    flip = BittcEstimator(est.net, device=torch.device("cpu"), tta="flip")
+    a, b = frame(7), frame(8)
+    ma, mb = a[:, ::-1].copy(), b[:, ::-1].copy()
+    thr = [0.5, 2.0]
+    est.reset()
+    plain, mirrored = est.geofence(a, b, thr), est.geofence(ma, mb, thr)[..., ::-1]
+    expected = 1 / (1 + np.exp(-0.5 * (_logit(plain) + _logit(mirrored))))
+    averaged = flip.geofence(a, b, thr)
+    np.testing.assert_allclose(averaged, expected, atol=1e-5)
+    assert np.abs(averaged - plain).max() > 1e-3  # the mirrored view changed something
+    # the flip-averaged estimator commutes with mirroring the input
+    np.testing.assert_allclose(flip.geofence(ma, mb, thr)[..., ::-1], averaged, atol=1e-5)
+    eta = np.sqrt(est.motion_in_depth(a, b) * est.motion_in_depth(ma, mb)[:, ::-1])
+    np.testing.assert_allclose(flip.motion_in_depth(a, b), eta, rtol=1e-5)
+
+
+def test_flip_averaging_streams(est):
+    flip = BittcEstimator(est.net, device=torch.device("cpu"), tta="flip")
+    f = [frame(20 + i) for i in range(3)]
+    outs = [flip.geofence(f[i], f[i + 1], [1.0]) for i in range(2)]
+    flip.continuous(f[1], f[2])
+    assert flip.feature_computations == 3  # both views of a frame in one extraction
+    flip.reset()
+    np.testing.assert_allclose(flip.geofence(f[1], f[2], [1.0]), outs[1], atol=1e-6)
+
+
+def test_bad_tta_mode(est):
+    with pytest.raises(EstimatorInputError, match="tta='mirror'"):
+        BittcEstimator(est.net, device=torch.device("cpu"), tta="mirror")
+    from bittc_core.estimator import make_estimator
+    with pytest.raises(EstimatorInputError, match="tta='flip' only applies to method 'bittc'"):
+        make_estimator("flow", tta="flip")
+
+
 def test_quantize_agrees_with_confident_binary_maps():
     rng = np.random.default_rng(0)
     k = 5

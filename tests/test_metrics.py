@@ -141,7 +141,7 @@ def test_eval_of_the_oracle_is_perfect_and_writes_json(tmp_path):
 
     out = tmp_path / "o.json"
     a = argparse.Namespace(data="synthetic", method="oracle", weights=None, out=str(out), split="val",
-                           limit=2, device="cpu")
+                           limit=2, device="cpu", tta="none")
     assert eval_cmd.run(a) == 0
     r = json.loads(out.read_text())
     assert r["miou"] == pytest.approx(1.0) and r["mid"] == pytest.approx(0.0) and r["pairs"] == 2
@@ -153,3 +153,15 @@ def test_eval_of_the_oracle_is_perfect_and_writes_json(tmp_path):
         eval_cmd.run(argparse.Namespace(**{**vars(a), "limit": 0}))
     with pytest.raises(CliError, match="--method 'magic'"):
         eval_cmd.run(argparse.Namespace(**{**vars(a), "method": "magic"}))
+    with pytest.raises(CliError, match="--tta 'mirror'"):
+        eval_cmd.run(argparse.Namespace(**{**vars(a), "tta": "mirror"}))
+    with pytest.raises(CliError, match="--tta 'flip' applies to --method bittc only"):
+        eval_cmd.run(argparse.Namespace(**{**vars(a), "tta": "flip"}))
+    assert not list(tmp_path.glob(".*.tmp"))
+
+
+def test_eval_tta_modes_match_the_estimator():
+    from bittc_core.cli import eval_cmd
+    from bittc_core.estimator import METHODS, TTA_MODES
+
+    assert eval_cmd.TTA_MODES == TTA_MODES and eval_cmd.METHODS == METHODS

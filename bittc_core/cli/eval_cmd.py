@@ -20,6 +20,7 @@ from bittc_core.cli.common import add_device_flag, check_device
 from bittc_core.errors import CliError
 
 METHODS = ("bittc", "flow", "oracle")
+TTA_MODES = ("none", "flip")  # bittc_core.estimator.TTA_MODES, kept here so --help imports no torch
 SPLITS = ("train", "val", "test")
 
 
@@ -32,6 +33,8 @@ def add_parser(sub) -> argparse.ArgumentParser:
     p.add_argument("--out", default=None, help="JSON file to write")
     p.add_argument("--split", default="test", help="train, val or test (default test)")
     p.add_argument("--limit", type=int, default=None, help="evaluate the first N pairs only")
+    p.add_argument("--tta", default="none", help="bittc only: 'flip' averages the network over the plain "
+                   "and the mirrored frames (about 2x the latency); default 'none'")
     add_device_flag(p)
     return p
 
@@ -45,6 +48,10 @@ def _check(args) -> Path:
         raise CliError(f"--limit {args.limit}: must be > 0")
     if args.weights is not None and args.method != "bittc":
         raise CliError(f"--weights applies to --method bittc only, not {args.method!r}")
+    if args.tta not in TTA_MODES:
+        raise CliError(f"--tta {args.tta!r}: expected one of {TTA_MODES}")
+    if args.tta != "none" and args.method != "bittc":
+        raise CliError(f"--tta {args.tta!r} applies to --method bittc only, not {args.method!r}")
     check_device(args.device)
     out = Path(args.out or f"eval_{args.method}_{args.split}.json")
     if out.suffix != ".json":
@@ -111,9 +118,9 @@ def run(args) -> int:
     from bittc_core.train.data import open_split
 
     dataset = open_split(args.data, args.split)
-    estimator = make_estimator(args.method, weights=args.weights, device=args.device)
+    estimator = make_estimator(args.method, weights=args.weights, device=args.device, tta=args.tta)
     result = {"method": args.method, "split": args.split, "data": args.data,
-              "weights": args.weights, **evaluate(estimator, dataset, args.limit)}
+              "weights": args.weights, "tta": args.tta, **evaluate(estimator, dataset, args.limit)}
     print(format_table(result))
     fd, tmp = tempfile.mkstemp(prefix=f".{out.name}.", suffix=".tmp", dir=out.parent)
     with os.fdopen(fd, "w") as f:

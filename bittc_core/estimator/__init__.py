@@ -1,23 +1,27 @@
 """Estimators of binary / quantized / continuous TTC behind one interface.
 
-``make_estimator("bittc" | "flow" | "oracle", weights=None, device="auto")``.
+``make_estimator("bittc" | "flow" | "oracle", weights=None, device="auto", tta="none")``;
+``tta="flip"`` (network only) averages each call over the plain and the mirrored frames.
 """
 
 from __future__ import annotations
 
 from bittc_core.estimator.base import Estimator, EstimatorInputError, quantize
 from bittc_core.estimator.flow import FlowBaselineConfig, FlowEstimator
-from bittc_core.estimator.network import BittcEstimator
+from bittc_core.estimator.network import TTA_MODES, BittcEstimator
 from bittc_core.estimator.oracle import OracleEstimator
 
 METHODS = ("bittc", "flow", "oracle")
 
 
-def make_estimator(method: str, weights: str | None = None, device: str = "auto") -> Estimator:
+def make_estimator(method: str, weights: str | None = None, device: str = "auto",
+                   tta: str = "none") -> Estimator:
     if method == "bittc":
-        return BittcEstimator.from_checkpoint(weights, device=device)
+        return BittcEstimator.from_checkpoint(weights, device=device, tta=tta)
     if weights is not None:
         raise EstimatorInputError(f"--weights {weights!r} only applies to method 'bittc', not {method!r}")
+    if tta != "none":
+        raise EstimatorInputError(f"tta={tta!r} only applies to method 'bittc', not {method!r}")
     if method == "flow":
         return FlowEstimator()
     if method == "oracle":
@@ -26,4 +30,4 @@ def make_estimator(method: str, weights: str | None = None, device: str = "auto"
 
 
 __all__ = ["Estimator", "EstimatorInputError", "quantize", "BittcEstimator", "FlowEstimator",
-           "FlowBaselineConfig", "OracleEstimator", "make_estimator", "METHODS"]
+           "FlowBaselineConfig", "OracleEstimator", "make_estimator", "METHODS", "TTA_MODES"]

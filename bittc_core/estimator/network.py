@@ -10,6 +10,13 @@ are reused when f1 comes back as ``image_prev``; calling ``geofence`` and then
 ``continuous`` on the same pair recomputes nothing but the hypotheses. All thresholds
 of a call share the same features and are classified together (in batches of
 ``CPU_INFERENCE_HYPOTHESES`` on a CPU, see ``bittc_core.model.network``).
+
+Flip averaging (``tta="flip"``, a test-time self-ensemble): each frame also goes through
+the network mirrored left to right (the mirrored pair is a valid scene with the same
+eta and TTC, and the network was trained on mirrored pairs); the mirrored view's
+outputs are mirrored back and averaged with the plain view's, geofence logits and log
+eta alike. The two views ride along the batch dimension (view 0 plain, view 1
+mirrored), so the cache holds both views' features and the cost is about 2x.
 """
 
 from __future__ import annotations
@@ -25,16 +32,20 @@ from bittc_core.estimator.base import Estimator, EstimatorInputError
 from bittc_core.model import BinaryTTCNet, ReferenceContext
 
 CACHED_FRAMES = 2
+TTA_MODES = ("none", "flip")
 
 
 class BittcEstimator(Estimator):
     name = "bittc"
 
-    def __init__(self, net: BinaryTTCNet, *, device: torch.device | None = None) -> None:
+    def __init__(self, net: BinaryTTCNet, *, device: torch.device | None = None, tta: str = "none") -> None:
+        if tta not in TTA_MODES:
+            raise EstimatorInputError(f"tta={tta!r}: expected one of {TTA_MODES}")
         cfg = net.config
         super().__init__(dt_s=cfg.frame_dt_s, tau_range_s=(cfg.tau_min_s, cfg.tau_max_s))
         self.device = device or next(net.parameters()).device
         self.net = net.to(self.device).eval()
+        self.tta = tta
         self._features: OrderedDict[int, tuple[torch.Tensor, torch.Tensor]] = OrderedDict()
         self._next_key = 0
         self._reference: tuple[torch.Tensor, ReferenceContext] | None = None
@@ -42,11 +53,11 @@ class BittcEstimator(Estimator):
 
     @classmethod
     def from_checkpoint(cls, path: str | os.PathLike | None = None,
-                        device: str = "auto") -> "BittcEstimator":
+                        device: str = "auto", tta: str = "none") -> "BittcEstimator":
         """Load ``path`` (default: the shipped ``bittc_core/weights/bittc_default.pt``)."""
         dev = pick_device(device)
         ckpt = load_checkpoint(path or DEFAULT_WEIGHTS, map_location=dev)
-        return cls(build_network(ckpt).to(dev), device=dev)
+        return cls(build_network(ckpt).to(dev), device=dev, tta=tta)
 
     def reset(self) -> None:
         """Forget cached frames (e.g. at the start of a new episode)."""
@@ -54,13 +65,23 @@ class BittcEstimator(Estimator):
         self._reference = None
 
     # -- cache --------------------------------------------------------------------------
+    def _views(self, image: torch.Tensor) -> torch.Tensor:
+        """(1, ...) -> (V, ...): the plain view, and the mirrored one with ``tta="flip"``."""
+        return torch.cat((image, image.flip(-1))) if self.tta == "flip" else image
+
+    def _merge(self, out: torch.Tensor) -> torch.Tensor:
+        """(V, ...) outputs in the views' grids -> (...) in the plain grid, averaged."""
+        return 0.5 * (out[0] + out[1].flip(-1)) if self.tta == "flip" else out[0]
+
     def _frame_features(self, image: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
-        """-> (image on device, features), from the cache when the pixels match."""
+        """(1, 3, H, W) -> (its views on the device (V, 3, H, W), their features), from the
+        cache when the pixels match."""
         image = image.to(self.device, non_blocking=True)
         for key, (cached, feats) in self._features.items():
-            if cached.shape == image.shape and torch.equal(cached, image):
+            if cached.shape[1:] == image.shape[1:] and torch.equal(cached[:1], image):
                 self._features.move_to_end(key)
                 return cached, feats
+        image = self._views(image)
         feats = self.net.extract(image)
         self.feature_computations += 1
         self._features[self._next_key] = (image.clone(), feats)  # the caller may reuse its buffer
@@ -89,8 +110,8 @@ class BittcEstimator(Estimator):
                                       "must be multiples of 3")
         ctx, feat_prev = self._prepare(prev, latest)
         eta_t = torch.as_tensor(eta, dtype=torch.float32, device=self.device)[None]
-        prob = torch.sigmoid(self.net.classify_eta(ctx, feat_prev, eta_t))[0]
-        return prob.float().cpu().numpy()
+        logits = self.net.classify_eta(ctx, feat_prev, eta_t.expand(feat_prev.shape[0], -1))
+        return torch.sigmoid(self._merge(logits)).float().cpu().numpy()
 
     @torch.inference_mode()
     def _motion_in_depth(self, prev: torch.Tensor, latest: torch.Tensor) -> np.ndarray:
@@ -99,4 +120,4 @@ class BittcEstimator(Estimator):
                                       "must be multiples of 3")
         ctx, feat_prev = self._prepare(prev, latest)
         out = self.net.continuous(ctx, feat_prev)
-        return torch.exp(out.log_eta)[0, 0].float().cpu().numpy()
+        return torch.exp(self._merge(out.log_eta[:, 0])).float().cpu().numpy()
