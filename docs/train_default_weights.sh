@@ -7,9 +7,10 @@
 # Stages as in the paper: binary-flow pre-training, binary TTC with binary flow as the
 # auxiliary task (0.8 / 0.2; run four times, each run restarting the learning-rate
 # schedule from the previous run's best weights; the third and fourth add a Lovasz surrogate
-# of the per-image two-class IoU to the BCE), all on bittc_v1 (smooth ground); a fifth binary run on
-# bittc_v2 (the same scenes with the detailed ground), then the continuous stage with the binary network
-# frozen (--freeze-binary: only the continuous refinement learns, SmoothL1 on the refined log eta;
+# of the per-image two-class IoU to the BCE), all on bittc_v1 (smooth ground); a fifth and a
+# sixth binary run on bittc_v2 (the same scenes with the detailed ground; the sixth at half the
+# learning rate, moving-actor pixels weighted 2 in the loss), then the continuous stage with the
+# binary network frozen (--freeze-binary: only the continuous refinement learns, SmoothL1 on the refined log eta;
 # end to end, BCE 0.1 + SmoothL1 0.9 as in the paper, this small model lost 0.05 mIoU).
 set -euo pipefail
 DATA=${1:-data/bittc_v1}
@@ -21,6 +22,7 @@ BINARY2_STEPS=${BINARY2_STEPS:-7000}
 BINARY3_STEPS=${BINARY3_STEPS:-5000}
 BINARY4_STEPS=${BINARY4_STEPS:-5000}
 GROUND_STEPS=${GROUND_STEPS:-5000}
+ACTOR_STEPS=${ACTOR_STEPS:-4000}
 CONT_STEPS=${CONT_STEPS:-1000}
 mkdir -p "$OUT"
 bittc train --data "$DATA" --config cpu-small --stage flow --steps "$FLOW_STEPS" --seed 0 --out "$OUT/flow.pt"
@@ -29,7 +31,8 @@ bittc train --data "$DATA" --config cpu-small --stage binary --steps "$BINARY2_S
 bittc train --data "$DATA" --config cpu-small --stage binary --steps "$BINARY3_STEPS" --seed 3 --lr 2e-4 --val-every 1000 --val-limit 256 --lovasz-weight 0.5 --init "$OUT/binary2.pt" --out "$OUT/binary3.pt"
 bittc train --data "$DATA" --config cpu-small --stage binary --steps "$BINARY4_STEPS" --seed 4 --lr 2e-4 --val-every 1000 --val-limit 256 --lovasz-weight 0.5 --init "$OUT/binary3.pt" --out "$OUT/binary4.pt"
 bittc train --data "$DATA2" --config cpu-small --stage binary --steps "$GROUND_STEPS" --seed 7 --lr 2e-4 --val-every 1000 --val-limit 256 --lovasz-weight 0.5 --init "$OUT/binary4.pt" --out "$OUT/binary_ground.pt"
-bittc train --data "$DATA2" --config cpu-small --stage continuous --freeze-binary --steps "$CONT_STEPS" --seed 0 --lr 5e-4 --val-every 250 --init "$OUT/binary_ground.pt" --out "$OUT/continuous.pt"
+bittc train --data "$DATA2" --config cpu-small --stage binary --steps "$ACTOR_STEPS" --seed 8 --lr 1e-4 --val-every 1000 --val-limit 256 --lovasz-weight 0.5 --actor-weight 2 --init "$OUT/binary_ground.pt" --out "$OUT/binary_actor.pt"
+bittc train --data "$DATA2" --config cpu-small --stage continuous --freeze-binary --steps "$CONT_STEPS" --seed 0 --lr 5e-4 --val-every 250 --init "$OUT/binary_actor.pt" --out "$OUT/continuous.pt"
 # ship the continuous stage's best checkpoint (by val MiD; the binary part is the same in all)
 python -c "import sys; from bittc_core.checkpoint import load_checkpoint, release_payload, save_checkpoint
 save_checkpoint(sys.argv[2], release_payload(load_checkpoint(sys.argv[1], map_location='cpu')))" \
