@@ -105,12 +105,18 @@ def test_flip_averaging_is_the_mean_of_both_views_and_mirror_symmetric(est):
     plain, mirrored = est.geofence(a, b, thr), est.geofence(ma, mb, thr)[..., ::-1]
     expected = 1 / (1 + np.exp(-0.5 * (_logit(plain) + _logit(mirrored))))
     averaged = flip.geofence(a, b, thr)
-    np.testing.assert_allclose(averaged, expected, atol=1e-5)
+    np.testing.assert_allclose(averaged, expected, atol=1e-6)
     assert np.abs(averaged - plain).max() > 1e-3  # the mirrored view changed something
+    # the tolerance tells averaging logits from averaging probabilities
+    assert np.abs(0.5 * (plain + mirrored) - expected).max() > 2e-6
     # the flip-averaged estimator commutes with mirroring the input
-    np.testing.assert_allclose(flip.geofence(ma, mb, thr)[..., ::-1], averaged, atol=1e-5)
-    eta = np.sqrt(est.motion_in_depth(a, b) * est.motion_in_depth(ma, mb)[:, ::-1])
-    np.testing.assert_allclose(flip.motion_in_depth(a, b), eta, rtol=1e-5)
+    np.testing.assert_allclose(flip.geofence(ma, mb, thr)[..., ::-1], averaged, atol=1e-6)
+    eta_plain, eta_mirrored = est.motion_in_depth(a, b), est.motion_in_depth(ma, mb)[:, ::-1]
+    eta = np.sqrt(eta_plain * eta_mirrored)  # the mean of log eta
+    np.testing.assert_allclose(flip.motion_in_depth(a, b), eta, rtol=1e-6)
+    assert np.abs(0.5 * (eta_plain + eta_mirrored) / eta - 1).max() > 2e-6
+    with pytest.raises(AttributeError):
+        flip.tta = "none"  # fixed at construction: the cache holds both views
 
 
 def test_flip_averaging_streams(est):
@@ -121,6 +127,19 @@ def test_flip_averaging_streams(est):
     assert flip.feature_computations == 3  # both views of a frame in one extraction
     flip.reset()
     np.testing.assert_allclose(flip.geofence(f[1], f[2], [1.0]), outs[1], atol=1e-6)
+
+
+@pytest.mark.parametrize("tta", ["none", "flip"])
+def test_a_repeated_pair_prepares_its_reference_once(est, tta, monkeypatch):
+    e = BittcEstimator(est.net, device=torch.device("cpu"), tta=tta)
+    calls = []
+    prepare = e.net.prepare_reference
+    monkeypatch.setattr(e.net, "prepare_reference", lambda *a: calls.append(1) or prepare(*a))
+    a, b = frame(30), frame(31)
+    e.geofence(a, b, [1.0])
+    e.continuous(a, b)
+    e.geofence(a, b.copy(), [2.0])
+    assert len(calls) == 1 and e.feature_computations == 2
 
 
 def test_bad_tta_mode(est):

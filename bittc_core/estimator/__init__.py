@@ -16,6 +16,8 @@ METHODS = ("bittc", "flow", "oracle")
 
 def make_estimator(method: str, weights: str | None = None, device: str = "auto",
                    tta: str = "none") -> Estimator:
+    if method not in METHODS:
+        raise EstimatorInputError(f"unknown method {method!r}; expected one of {METHODS}")
     if method == "bittc":
         return BittcEstimator.from_checkpoint(weights, device=device, tta=tta)
     if weights is not None:
@@ -24,9 +26,7 @@ def make_estimator(method: str, weights: str | None = None, device: str = "auto"
         raise EstimatorInputError(f"tta={tta!r} only applies to method 'bittc', not {method!r}")
     if method == "flow":
         return FlowEstimator()
-    if method == "oracle":
-        return OracleEstimator()
-    raise EstimatorInputError(f"unknown method {method!r}; expected one of {METHODS}")
+    return OracleEstimator()
 
 
 __all__ = ["Estimator", "EstimatorInputError", "quantize", "BittcEstimator", "FlowEstimator",

@@ -35,17 +35,21 @@ CACHED_FRAMES = 2
 TTA_MODES = ("none", "flip")
 
 
+def check_tta(tta: str) -> None:
+    if tta not in TTA_MODES:
+        raise EstimatorInputError(f"tta={tta!r}: expected one of {TTA_MODES}")
+
+
 class BittcEstimator(Estimator):
     name = "bittc"
 
     def __init__(self, net: BinaryTTCNet, *, device: torch.device | None = None, tta: str = "none") -> None:
-        if tta not in TTA_MODES:
-            raise EstimatorInputError(f"tta={tta!r}: expected one of {TTA_MODES}")
+        check_tta(tta)
         cfg = net.config
         super().__init__(dt_s=cfg.frame_dt_s, tau_range_s=(cfg.tau_min_s, cfg.tau_max_s))
         self.device = device or next(net.parameters()).device
         self.net = net.to(self.device).eval()
-        self.tta = tta
+        self._tta = tta
         self._features: OrderedDict[int, tuple[torch.Tensor, torch.Tensor]] = OrderedDict()
         self._next_key = 0
         self._reference: tuple[torch.Tensor, ReferenceContext] | None = None
@@ -55,9 +59,15 @@ class BittcEstimator(Estimator):
     def from_checkpoint(cls, path: str | os.PathLike | None = None,
                         device: str = "auto", tta: str = "none") -> "BittcEstimator":
         """Load ``path`` (default: the shipped ``bittc_core/weights/bittc_default.pt``)."""
+        check_tta(tta)
         dev = pick_device(device)
         ckpt = load_checkpoint(path or DEFAULT_WEIGHTS, map_location=dev)
         return cls(build_network(ckpt).to(dev), device=dev, tta=tta)
+
+    @property
+    def tta(self) -> str:
+        """Test-time averaging, fixed at construction (the cache holds its views)."""
+        return self._tta
 
     def reset(self) -> None:
         """Forget cached frames (e.g. at the start of a new episode)."""
@@ -70,7 +80,8 @@ class BittcEstimator(Estimator):
         return torch.cat((image, image.flip(-1))) if self.tta == "flip" else image
 
     def _merge(self, out: torch.Tensor) -> torch.Tensor:
-        """(V, ...) outputs in the views' grids -> (...) in the plain grid, averaged."""
+        """(V, ..., W) outputs in the views' grids (last axis: image x) -> (..., W) in the
+        plain grid, averaged."""
         return 0.5 * (out[0] + out[1].flip(-1)) if self.tta == "flip" else out[0]
 
     def _frame_features(self, image: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
@@ -81,14 +92,17 @@ class BittcEstimator(Estimator):
             if cached.shape[1:] == image.shape[1:] and torch.equal(cached[:1], image):
                 self._features.move_to_end(key)
                 return cached, feats
-        image = self._views(image)
-        feats = self.net.extract(image)
+        # a copy (the caller may reuse its buffer; torch.cat copies already), and the same
+        # object is returned now and from the cache later, so that ``_prepare`` recognises
+        # a repeated latest frame by identity
+        views = self._views(image) if self.tta == "flip" else image.clone()
+        feats = self.net.extract(views)
         self.feature_computations += 1
-        self._features[self._next_key] = (image.clone(), feats)  # the caller may reuse its buffer
+        self._features[self._next_key] = (views, feats)
         self._next_key += 1
         while len(self._features) > CACHED_FRAMES:
             self._features.popitem(last=False)
-        return image, feats
+        return views, feats
 
     def _prepare(self, prev: torch.Tensor, latest: torch.Tensor) -> tuple[ReferenceContext, torch.Tensor]:
         # prev first, so that the least recently used entry evicted by a new latest frame
