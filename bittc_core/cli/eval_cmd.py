@@ -34,7 +34,7 @@ def add_parser(sub) -> argparse.ArgumentParser:
     p.add_argument("--split", default="test", help="train, val or test (default test)")
     p.add_argument("--limit", type=int, default=None, help="evaluate the first N pairs only")
     p.add_argument("--tta", default="none", help="bittc only: 'flip' averages the network over the plain "
-                   "and the mirrored frames (about 2x the latency); default 'none'")
+                   "and the mirrored frames (1.4-2.2x the latency); default 'none'")
     add_device_flag(p)
     return p
 

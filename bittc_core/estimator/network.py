@@ -76,8 +76,9 @@ class BittcEstimator(Estimator):
 
     # -- cache --------------------------------------------------------------------------
     def _views(self, image: torch.Tensor) -> torch.Tensor:
-        """(1, ...) -> (V, ...): the plain view, and the mirrored one with ``tta="flip"``."""
-        return torch.cat((image, image.flip(-1))) if self.tta == "flip" else image
+        """(1, ...) -> a new (V, ...) tensor: the plain view, and the mirrored one with
+        ``tta="flip"`` (a copy either way: the caller may reuse its buffer)."""
+        return torch.cat((image, image.flip(-1))) if self.tta == "flip" else image.clone()
 
     def _merge(self, out: torch.Tensor) -> torch.Tensor:
         """(V, ..., W) outputs in the views' grids (last axis: image x) -> (..., W) in the
@@ -92,10 +93,9 @@ class BittcEstimator(Estimator):
             if cached.shape[1:] == image.shape[1:] and torch.equal(cached[:1], image):
                 self._features.move_to_end(key)
                 return cached, feats
-        # a copy (the caller may reuse its buffer; torch.cat copies already), and the same
-        # object is returned now and from the cache later, so that ``_prepare`` recognises
-        # a repeated latest frame by identity
-        views = self._views(image) if self.tta == "flip" else image.clone()
+        # the same object is returned now and from the cache later, so that ``_prepare``
+        # recognises a repeated latest frame by identity
+        views = self._views(image)
         feats = self.net.extract(views)
         self.feature_computations += 1
         self._features[self._next_key] = (views, feats)
