@@ -130,7 +130,7 @@ def test_labels():
 def args(**kw):
     base = dict(data="synthetic", config="tiny", out="m.pt", resume=False, init=None, seed=0, steps=10,
                 batch_size=2, lr=3e-4, warmup_steps=2, val_every=5, val_limit=4, device="cpu", stage="binary",
-                freeze_binary=False, actor_weight=1.0, lovasz_weight=0.0)
+                freeze_binary=False, actor_weight=1.0, lovasz_weight=0.0, teacher=None, distill_weight=None)
     base.update(kw)
     return argparse.Namespace(**base)
 
@@ -149,6 +149,9 @@ def args(**kw):
     (dict(actor_weight=0.0), "--actor-weight 0.0"),
     (dict(lovasz_weight=-1.0), "--lovasz-weight -1.0"),
     (dict(freeze_binary=True), "--freeze-binary applies to the continuous stage, not --stage 'binary'"),
+    (dict(teacher="missing.pt"), "--teacher 'missing.pt': no such file"),
+    (dict(teacher="missing.pt", stage="continuous"), "--teacher applies to --stage binary, not 'continuous'"),
+    (dict(distill_weight=0.5), "--distill-weight needs --teacher"),
 ])
 def test_train_flags_are_validated(kw, match):
     with pytest.raises(CliError, match=match):

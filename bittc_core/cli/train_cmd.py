@@ -44,6 +44,11 @@ def add_parser(sub) -> argparse.ArgumentParser:
     p.add_argument("--lovasz-weight", type=float, default=0.0,
                    help="binary stage: add this weight x a Lovasz surrogate of the per-map two-class IoU "
                         "to the BCE (default 0)")
+    p.add_argument("--teacher", default=None,
+                   help="binary stage: also learn the flip-averaged maps of this frozen checkpoint (same config; "
+                        "self-distillation, soft BCE targets beside the ground truth)")
+    p.add_argument("--distill-weight", type=float, default=None,
+                   help="with --teacher: weight of the distillation BCE beside the ground-truth BCE (default 1)")
     p.add_argument("--freeze-binary", action="store_true",
                    help="continuous stage: train the continuous refinement only, the binary network frozen")
     return p
@@ -75,6 +80,16 @@ def _check(args) -> None:
         raise CliError(f"--lovasz-weight {args.lovasz_weight}: must be >= 0")
     if args.freeze_binary and args.stage not in ("continuous", "all"):
         raise CliError(f"--freeze-binary applies to the continuous stage, not --stage {args.stage!r}")
+    if args.teacher is not None:
+        if args.stage != "binary":
+            raise CliError(f"--teacher applies to --stage binary, not {args.stage!r}")
+        if not Path(args.teacher).is_file():
+            raise CliError(f"--teacher {args.teacher!r}: no such file")
+    if args.distill_weight is not None:
+        if args.teacher is None:
+            raise CliError("--distill-weight needs --teacher")
+        if not args.distill_weight > 0:
+            raise CliError(f"--distill-weight {args.distill_weight}: must be > 0")
     if args.resume and args.init:
         raise CliError("--resume and --init exclude each other")
     if args.init and not Path(args.init).is_file():
@@ -94,7 +109,7 @@ def run(args) -> int:
     _check(args)
     import torch
 
-    from bittc_core.checkpoint import init_network, load_checkpoint, pick_device
+    from bittc_core.checkpoint import build_network, init_network, load_checkpoint, pick_device
     from bittc_core.model import BinaryTTCNet, get_config
     from bittc_core.train import STAGES, RunPaths, TrainConfig, Trainer
     from bittc_core.train.data import open_split
@@ -115,6 +130,11 @@ def run(args) -> int:
         net = init_network(args.init, args.config)
     else:
         net = BinaryTTCNet(get_config(args.config))
+    teacher = None
+    if args.teacher:
+        teacher = build_network(load_checkpoint(args.teacher, map_location="cpu"))
+        if teacher.config != net.config:
+            raise CliError(f"--teacher {args.teacher!r}: its model config differs from --config {args.config!r}")
     train_set = open_split(args.data, "train", augment=True, seed=args.seed)
     val_set = open_split(args.data, "val", seed=args.seed)
     for name, ds in (("train", train_set), ("val", val_set)):
@@ -133,18 +153,19 @@ def run(args) -> int:
 
     base = TrainConfig(steps=args.steps, batch_size=args.batch_size, lr=args.lr, warmup_steps=args.warmup_steps,
                        val_every=args.val_every, val_limit=args.val_limit, seed=args.seed,
-                       actor_weight=args.actor_weight, lovasz_weight=args.lovasz_weight)
+                       actor_weight=args.actor_weight, lovasz_weight=args.lovasz_weight,
+                       distill_weight=(args.distill_weight or 1.0) if teacher is not None else 0.0)
     write_yaml_atomic(paths.config, {
         "argv": list(sys.argv),
         "data": args.data, "device": str(device), "stages": stages,
-        "model_config_name": args.config,
+        "model_config_name": args.config, "teacher": args.teacher,
         "model_config": dataclasses.asdict(net.config),
         "train_config": dataclasses.asdict(base),
     })
-    meta = {"data": args.data, "seed": args.seed}
+    meta = {"data": args.data, "seed": args.seed, **({"teacher": args.teacher} if args.teacher else {})}
     for stage in stages:
         cfg = dataclasses.replace(base, stage=stage, freeze_binary=args.freeze_binary and stage == "continuous")
-        trainer = Trainer(net, args.config, cfg, train_set, val_set, device, paths, meta)
+        trainer = Trainer(net, args.config, cfg, train_set, val_set, device, paths, meta, teacher=teacher)
         if stage == resume_stage:
             trainer.resume()
         summary = trainer.run()

@@ -30,6 +30,7 @@ import torch
 from bittc_core.checkpoint import DEFAULT_WEIGHTS, build_network, load_checkpoint, pick_device
 from bittc_core.estimator.base import Estimator, EstimatorInputError
 from bittc_core.model import BinaryTTCNet, ReferenceContext
+from bittc_core.model.flip import flip_views, merge_flip_views
 
 CACHED_FRAMES = 2
 TTA_MODES = ("none", "flip")
@@ -78,12 +79,12 @@ class BittcEstimator(Estimator):
     def _views(self, image: torch.Tensor) -> torch.Tensor:
         """(1, ...) -> a new (V, ...) tensor: the plain view, and the mirrored one with
         ``tta="flip"`` (a copy either way: the caller may reuse its buffer)."""
-        return torch.cat((image, image.flip(-1))) if self.tta == "flip" else image.clone()
+        return flip_views(image) if self.tta == "flip" else image.clone()
 
     def _merge(self, out: torch.Tensor) -> torch.Tensor:
         """(V, ..., W) outputs in the views' grids (last axis: image x) -> (..., W) in the
         plain grid, averaged."""
-        return 0.5 * (out[0] + out[1].flip(-1)) if self.tta == "flip" else out[0]
+        return merge_flip_views(out)[0] if self.tta == "flip" else out[0]
 
     def _frame_features(self, image: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
         """(1, 3, H, W) -> (its views on the device (V, 3, H, W), their features), from the

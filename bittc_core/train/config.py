@@ -23,6 +23,9 @@ class TrainConfig:
     train_eta_max: float = 1.1  # > 1: receding thresholds too (their negatives matter)
     actor_weight: float = 1.0  # binary TTC loss weight of moving-actor pixels (instance > 0), static 1
     lovasz_weight: float = 0.0  # binary stage: + this x Lovasz two-class IoU surrogate per map
+    # binary stage: + this x BCE towards a frozen teacher's flip-averaged maps (``train.distill``);
+    # > 0 needs a teacher network of the same config
+    distill_weight: float = 0.0
     ttc_weight: float = 0.8  # paper: binary TTC 0.8, binary flow 0.2
     flow_weight: float = 0.2
     cont_bce_weight: float = 0.1  # paper: BCE on the stacked maps 0.1, SmoothL1 on AUC 0.9
@@ -50,6 +53,10 @@ class TrainConfig:
             raise ValueError(f"actor_weight={self.actor_weight}: must be > 0")
         if self.lovasz_weight < 0:
             raise ValueError(f"lovasz_weight={self.lovasz_weight}: must be >= 0")
+        if self.distill_weight < 0:
+            raise ValueError(f"distill_weight={self.distill_weight}: must be >= 0")
+        if self.distill_weight > 0 and self.stage != "binary":
+            raise ValueError(f"distill_weight applies to the binary stage, not {self.stage!r}")
         if self.warmup_steps < 0:
             raise ValueError(f"warmup_steps={self.warmup_steps}: must be >= 0")
         if self.lr <= 0 or self.clip_grad_norm <= 0:

@@ -2,7 +2,8 @@
 
 Stages: ``flow``: binary-flow pre-training, TTC head unsupervised; ``binary``: binary
 TTC (several eta thresholds per pair, moving-actor pixels weighted ``actor_weight``; BCE,
-plus ``lovasz_weight`` x a Lovasz surrogate of the per-map two-class IoU) + binary flow
+plus ``lovasz_weight`` x a Lovasz surrogate of the per-map two-class IoU, plus
+``distill_weight`` x BCE towards a frozen teacher's flip-averaged maps) + binary flow
 auxiliary, weights 0.8 / 0.2;
 ``continuous``: the stacked TTC volume, BCE on its maps (0.1) + SmoothL1 on the AUC and
 refined log eta (0.9), still with the flow auxiliary (0.8 / 0.2); with
@@ -31,13 +32,14 @@ from bittc_core.checkpoint import load_checkpoint, make_payload, save_checkpoint
 from bittc_core.model import BinaryTTCNet
 from bittc_core.model.auc import auc_eta
 from bittc_core.train.config import TrainConfig
+from bittc_core.train.distill import flip_averaged_logits
 from bittc_core.train.losses import lovasz_two_class, masked_bce, masked_smooth_l1
 from bittc_core.train.targets import eta_labels, sample_eta, sample_shifts_px, shift_labels, valid_mask
 from bittc_core.train.validate import validate
 
 # new columns go last, so a run resumed from an older log keeps its columns aligned
 CSV_FIELDS = ("step", "stage", "loss", "loss_ttc", "loss_flow", "loss_cont", "lr", "grad_norm",
-              "s_per_step", "val_miou", "val_mid", "loss_iou")
+              "s_per_step", "val_miou", "val_mid", "loss_iou", "loss_distill")
 
 
 @dataclass(frozen=True)
@@ -70,8 +72,14 @@ def _forever(loader: DataLoader, epoch: int = 0):
 class Trainer:
     def __init__(self, net: BinaryTTCNet, config_name: str, cfg: TrainConfig,
                  train_set: Dataset, val_set: Dataset, device: torch.device, paths: RunPaths,
-                 meta: dict | None = None) -> None:
+                 meta: dict | None = None, teacher: BinaryTTCNet | None = None) -> None:
+        if cfg.distill_weight > 0 and teacher is None:
+            raise ValueError(f"distill_weight={cfg.distill_weight} needs a teacher network")
+        if teacher is not None and teacher.config != net.config:
+            raise ValueError("the teacher's model config differs from the student's")
         self.net = net.to(device)
+        # frozen, eval mode (its batch-norm statistics stay put); only used with distill_weight > 0
+        self.teacher = teacher.to(device).eval().requires_grad_(False) if cfg.distill_weight > 0 else None
         self.config_name = config_name
         self.cfg = cfg
         self.device = device
@@ -146,6 +154,11 @@ class Trainer:
             if c.lovasz_weight > 0:
                 out["iou"] = lovasz_two_class(logits, labels, mask[:, None])
                 out["ttc"] = out["ttc"] + c.lovasz_weight * out["iou"]
+            if self.teacher is not None:
+                soft = torch.sigmoid(flip_averaged_logits(self.teacher, batch["image_prev"],
+                                                          batch["image_latest"], thr))
+                out["distill"] = masked_bce(logits, soft, mask[:, None], weight)
+                out["ttc"] = out["ttc"] + c.distill_weight * out["distill"]
         else:
             cont = net.continuous(ctx, feats[:b])
             levels = cont.levels.expand(b, -1)

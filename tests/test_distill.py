@@ -1,0 +1,130 @@
+"""Self-distillation from a frozen teacher's flip-averaged maps, and the flip views."""
+
+import argparse
+import copy
+
+import pytest
+import torch
+
+from bittc_core.cli import train_cmd
+from bittc_core.checkpoint import make_payload, save_checkpoint
+from bittc_core.data.synthetic import SyntheticConfig, SyntheticPairs
+from bittc_core.errors import CliError
+from bittc_core.model import BinaryTTCNet, get_config
+from bittc_core.model.flip import flip_views, merge_flip_views
+from bittc_core.train import RunPaths, TrainConfig, Trainer
+from bittc_core.train.distill import flip_averaged_logits
+from bittc_core.train.losses import masked_bce
+from bittc_core.train.targets import sample_eta, sample_shifts_px, valid_mask
+
+SMALL = SyntheticConfig(height_px=48, width_px=96, patch_half_size_px=(6.0, 20.0), max_translation_px=6.0)
+
+
+def tiny_net(seed: int) -> BinaryTTCNet:
+    torch.manual_seed(seed)
+    return BinaryTTCNet(get_config("tiny"))
+
+
+def test_flip_views_and_merge():
+    x = torch.randn(3, 2, 5, 7)
+    views = flip_views(x)
+    assert views.shape == (6, 2, 5, 7)
+    assert torch.equal(views[3:], x.flip(-1))
+    assert torch.equal(merge_flip_views(views), x)  # a mirror-consistent output comes back unchanged
+    out = torch.randn(6, 2, 5, 7)
+    assert torch.allclose(merge_flip_views(out), 0.5 * (out[:3] + out[3:].flip(-1)))
+    with pytest.raises(ValueError, match="even batch"):
+        merge_flip_views(torch.zeros(3, 1, 2, 2))
+
+
+def test_flip_averaged_logits_are_the_mean_of_both_views():
+    teacher = tiny_net(0).eval()
+    prev, latest = torch.rand(2, 3, 48, 96), torch.rand(2, 3, 48, 96)
+    eta = torch.tensor([[0.8, 0.95], [0.9, 1.05]])
+    with torch.no_grad():
+        plain = teacher(prev, latest, eta)
+        mirrored = teacher(prev.flip(-1), latest.flip(-1), eta).flip(-1)
+    avg = flip_averaged_logits(teacher, prev, latest, eta)
+    assert avg.shape == (2, 2, 48, 96)
+    assert torch.allclose(avg, 0.5 * (plain + mirrored), atol=1e-5)
+    assert not torch.allclose(avg, plain, atol=1e-3)  # the mirrored view does change the maps
+    # the average commutes with mirroring the pair
+    assert torch.allclose(flip_averaged_logits(teacher, prev.flip(-1), latest.flip(-1), eta).flip(-1), avg, atol=1e-5)
+    with pytest.raises(ValueError, match="eval mode"):
+        flip_averaged_logits(teacher.train(), prev, latest, eta)
+
+
+def make_trainer(tmp_path, teacher, **kw):
+    cfg = TrainConfig(stage="binary", steps=30, batch_size=4, lr=3e-3, warmup_steps=3, val_every=30,
+                      val_limit=4, log_every=5, **kw)
+    return Trainer(tiny_net(1), "tiny", cfg, SyntheticPairs(16, SMALL, seed=1), SyntheticPairs(4, SMALL, seed=2),
+                   torch.device("cpu"), RunPaths.from_out(tmp_path / "m.pt"), teacher=teacher)
+
+
+def test_distill_term_is_the_bce_towards_the_teachers_averaged_maps(tmp_path):
+    teacher = tiny_net(0)
+    tr = make_trainer(tmp_path, teacher, distill_weight=0.7)
+    assert not tr.teacher.training and not any(p.requires_grad for p in tr.teacher.parameters())
+    batch = next(iter(tr.loader))
+    tr.gen.manual_seed(5)
+    parts = tr.losses(batch)
+    base = make_trainer(tmp_path, None)  # same student, same hypotheses, no teacher
+    base.net.load_state_dict(tr.net.state_dict())
+    base.gen.manual_seed(5)
+    plain = base.losses(batch)
+    assert "distill" not in plain
+    # rebuild the distillation target by hand from the same hypotheses
+    tr.gen.manual_seed(5)
+    b = batch["image_prev"].shape[0]
+    c = tr.cfg
+    sample_shifts_px(b, c.shifts_per_pair, tr.net.config.max_shift_px, tr.gen)
+    thr = sample_eta(b, c.thresholds_per_pair, c.train_tau_min_s, c.train_eta_max, tr.net.config.frame_dt_s, tr.gen)
+    with torch.no_grad():
+        logits = tr.net(batch["image_prev"], batch["image_latest"], thr)
+    soft = torch.sigmoid(flip_averaged_logits(tr.teacher, batch["image_prev"], batch["image_latest"], thr))
+    expected = masked_bce(logits, soft, valid_mask(batch)[:, None])
+    assert parts["distill"].item() == pytest.approx(expected.item(), rel=1e-4)
+    assert parts["ttc"].item() == pytest.approx(plain["ttc"].item() + 0.7 * expected.item(), rel=1e-4)
+    parts["loss"].backward()
+    assert all(p.grad is None for p in tr.teacher.parameters())
+
+
+def test_a_few_distillation_steps_lower_the_loss(tmp_path):
+    tr = make_trainer(tmp_path, copy.deepcopy(tiny_net(0)), distill_weight=1.0)
+    batch = next(iter(tr.loader))
+    losses = []
+    for step in range(30):
+        for g in tr.opt.param_groups:
+            g["lr"] = tr.lr_at(step)
+        tr.gen.manual_seed(0)
+        loss = tr.losses(batch)["loss"]
+        tr.opt.zero_grad()
+        loss.backward()
+        tr.opt.step()
+        losses.append(loss.item())
+    assert sum(losses[-3:]) / 3 < 0.8 * sum(losses[:3]) / 3, losses
+
+
+def test_distillation_settings_are_checked(tmp_path):
+    with pytest.raises(ValueError, match="needs a teacher"):
+        make_trainer(tmp_path, None, distill_weight=1.0)
+    with pytest.raises(ValueError, match="distill_weight applies to the binary stage, not 'flow'"):
+        TrainConfig(stage="flow", distill_weight=1.0)
+    with pytest.raises(ValueError, match="distill_weight=-1"):
+        TrainConfig(distill_weight=-1.0)
+    other = BinaryTTCNet(get_config("cpu-small"))
+    with pytest.raises(ValueError, match="teacher's model config differs"):
+        make_trainer(tmp_path, other, distill_weight=1.0)
+
+
+def test_train_cli_refuses_a_teacher_of_another_config(tmp_path):
+    teacher = tmp_path / "teacher.pt"
+    save_checkpoint(teacher, make_payload(BinaryTTCNet(get_config("cpu-small")), "cpu-small", {}))
+    args = train_cmd.add_parser(argparse.ArgumentParser().add_subparsers()).parse_args(
+        ["--data", "synthetic", "--config", "tiny", "--out", str(tmp_path / "m.pt"), "--teacher", str(teacher),
+         "--steps", "2", "--device", "cpu"])
+    with pytest.raises(CliError, match="its model config differs from --config 'tiny'"):
+        train_cmd.run(args)
+    assert not (tmp_path / "m.pt").exists() and not (tmp_path / "m.last.pt").exists()
+    with pytest.raises(CliError, match="--distill-weight 0.0: must be > 0"):
+        train_cmd._check(argparse.Namespace(**{**vars(args), "distill_weight": 0.0}))
