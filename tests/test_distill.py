@@ -1,7 +1,7 @@
 """Self-distillation from a frozen teacher's flip-averaged maps, and the flip views."""
 
 import argparse
-import copy
+import dataclasses
 
 import pytest
 import torch
@@ -61,38 +61,51 @@ def make_trainer(tmp_path, teacher, **kw):
                    torch.device("cpu"), RunPaths.from_out(tmp_path / "m.pt"), teacher=teacher)
 
 
-def test_distill_term_is_the_bce_towards_the_teachers_averaged_maps(tmp_path):
-    teacher = tiny_net(0)
-    tr = make_trainer(tmp_path, teacher, distill_weight=0.7)
+@pytest.mark.parametrize("actor_weight", [1.0, 2.0])
+def test_distill_term_is_the_bce_towards_the_teachers_averaged_maps(tmp_path, actor_weight):
+    tr = make_trainer(tmp_path, tiny_net(0), distill_weight=0.7, actor_weight=actor_weight)
     assert not tr.teacher.training and not any(p.requires_grad for p in tr.teacher.parameters())
     batch = next(iter(tr.loader))
+    assert (batch["instance"] > 0).any()  # the actor weight has pixels to act on
     tr.gen.manual_seed(5)
     parts = tr.losses(batch)
-    base = make_trainer(tmp_path, None)  # same student, same hypotheses, no teacher
+    base = make_trainer(tmp_path, None, actor_weight=actor_weight)  # same student and hypotheses, no teacher
     base.net.load_state_dict(tr.net.state_dict())
     base.gen.manual_seed(5)
     plain = base.losses(batch)
     assert "distill" not in plain
     # rebuild the distillation target by hand from the same hypotheses
     tr.gen.manual_seed(5)
-    b = batch["image_prev"].shape[0]
-    c = tr.cfg
-    sample_shifts_px(b, c.shifts_per_pair, tr.net.config.max_shift_px, tr.gen)
-    thr = sample_eta(b, c.thresholds_per_pair, c.train_tau_min_s, c.train_eta_max, tr.net.config.frame_dt_s, tr.gen)
+    b, c, mc = batch["image_prev"].shape[0], tr.cfg, tr.net.config
+    sample_shifts_px(b, c.shifts_per_pair, mc.max_shift_px, tr.gen)
+    thr = sample_eta(b, c.thresholds_per_pair, c.train_tau_min_s, c.train_eta_max, mc.frame_dt_s, tr.gen)
     with torch.no_grad():
         logits = tr.net(batch["image_prev"], batch["image_latest"], thr)
     soft = torch.sigmoid(flip_averaged_logits(tr.teacher, batch["image_prev"], batch["image_latest"], thr))
-    expected = masked_bce(logits, soft, valid_mask(batch)[:, None])
+    weight = torch.where(batch["instance"] > 0, actor_weight, 1.0)[:, None]
+    expected = masked_bce(logits, soft, valid_mask(batch)[:, None], weight)
     assert parts["distill"].item() == pytest.approx(expected.item(), rel=1e-4)
     assert parts["ttc"].item() == pytest.approx(plain["ttc"].item() + 0.7 * expected.item(), rel=1e-4)
     parts["loss"].backward()
     assert all(p.grad is None for p in tr.teacher.parameters())
 
 
-def test_a_few_distillation_steps_lower_the_loss(tmp_path):
-    tr = make_trainer(tmp_path, copy.deepcopy(tiny_net(0)), distill_weight=1.0)
+def _teacher_gap_after_steps(tmp_path, distill_weight: float) -> tuple[float, float]:
+    """Mean |p_student - p_teacher| on one fixed batch before and after 30 steps on it."""
+    teacher = tiny_net(0)
+    tr = make_trainer(tmp_path, teacher, distill_weight=distill_weight)
     batch = next(iter(tr.loader))
-    losses = []
+    thr = torch.tensor([[0.8, 0.9, 0.95, 1.05]]).expand(batch["image_prev"].shape[0], -1)
+    soft = torch.sigmoid(flip_averaged_logits(tr.teacher, batch["image_prev"], batch["image_latest"], thr))
+
+    def gap() -> float:
+        tr.net.eval()
+        with torch.no_grad():
+            student = torch.sigmoid(tr.net(batch["image_prev"], batch["image_latest"], thr))
+        tr.net.train()
+        return float((student - soft).abs().mean())
+
+    before = gap()
     for step in range(30):
         for g in tr.opt.param_groups:
             g["lr"] = tr.lr_at(step)
@@ -101,30 +114,72 @@ def test_a_few_distillation_steps_lower_the_loss(tmp_path):
         tr.opt.zero_grad()
         loss.backward()
         tr.opt.step()
-        losses.append(loss.item())
-    assert sum(losses[-3:]) / 3 < 0.8 * sum(losses[:3]) / 3, losses
+    return before, gap()
+
+
+def test_distillation_pulls_the_student_towards_the_teacher(tmp_path):
+    # the loss's optimum per pixel is (y + w p_teacher) / (1 + w): near the teacher for a large w
+    before, distilled = _teacher_gap_after_steps(tmp_path, distill_weight=50.0)
+    _, ground_truth_only = _teacher_gap_after_steps(tmp_path, distill_weight=1e-9)
+    assert distilled < 0.7 * before, (before, distilled)
+    assert distilled < 0.7 * ground_truth_only, (distilled, ground_truth_only)
+
+
+def test_a_run_leaves_the_teacher_unchanged(tmp_path):
+    teacher = tiny_net(0)
+    frozen = {k: v.clone() for k, v in teacher.state_dict().items()}
+    tr = make_trainer(tmp_path, teacher, distill_weight=1.0)
+    tr.cfg = dataclasses.replace(tr.cfg, steps=4, val_every=2)
+    tr.run()  # training steps and validations
+    assert all(torch.equal(frozen[k], v) for k, v in tr.teacher.state_dict().items())
 
 
 def test_distillation_settings_are_checked(tmp_path):
     with pytest.raises(ValueError, match="needs a teacher"):
         make_trainer(tmp_path, None, distill_weight=1.0)
+    with pytest.raises(ValueError, match="a teacher network needs distill_weight > 0"):
+        make_trainer(tmp_path, tiny_net(0))
     with pytest.raises(ValueError, match="distill_weight applies to the binary stage, not 'flow'"):
         TrainConfig(stage="flow", distill_weight=1.0)
     with pytest.raises(ValueError, match="distill_weight=-1"):
         TrainConfig(distill_weight=-1.0)
-    other = BinaryTTCNet(get_config("cpu-small"))
-    with pytest.raises(ValueError, match="teacher's model config differs"):
-        make_trainer(tmp_path, other, distill_weight=1.0)
+    with pytest.raises(ValueError, match="another network of the student's model config"):
+        make_trainer(tmp_path, BinaryTTCNet(get_config("cpu-small")), distill_weight=1.0)
 
 
-def test_train_cli_refuses_a_teacher_of_another_config(tmp_path):
-    teacher = tmp_path / "teacher.pt"
-    save_checkpoint(teacher, make_payload(BinaryTTCNet(get_config("cpu-small")), "cpu-small", {}))
-    args = train_cmd.add_parser(argparse.ArgumentParser().add_subparsers()).parse_args(
-        ["--data", "synthetic", "--config", "tiny", "--out", str(tmp_path / "m.pt"), "--teacher", str(teacher),
-         "--steps", "2", "--device", "cpu"])
+def cli_args(tmp_path, *extra):
+    parser = argparse.ArgumentParser()
+    train_cmd.add_parser(parser.add_subparsers())
+    return parser.parse_args(["train", "--data", "synthetic", "--config", "tiny", "--out", str(tmp_path / "m.pt"),
+                              "--steps", "2", "--val-every", "2", "--val-limit", "2", "--batch-size", "2",
+                              "--device", "cpu", *extra])
+
+
+def save_net(path, net, name):
+    save_checkpoint(path, make_payload(net, name, {}))
+    return str(path)
+
+
+def test_train_cli_refuses_a_teacher_of_another_config_or_its_own_output(tmp_path):
+    other = save_net(tmp_path / "teacher.pt", BinaryTTCNet(get_config("cpu-small")), "cpu-small")
     with pytest.raises(CliError, match="its model config differs from --config 'tiny'"):
-        train_cmd.run(args)
+        train_cmd.run(cli_args(tmp_path, "--teacher", other))
     assert not (tmp_path / "m.pt").exists() and not (tmp_path / "m.last.pt").exists()
+    own = save_net(tmp_path / "m.pt", tiny_net(0), "tiny")
+    with pytest.raises(CliError, match="is this run's own checkpoint"):
+        train_cmd.run(cli_args(tmp_path, "--teacher", own))
     with pytest.raises(CliError, match="--distill-weight 0.0: must be > 0"):
-        train_cmd._check(argparse.Namespace(**{**vars(args), "distill_weight": 0.0}))
+        train_cmd._check(cli_args(tmp_path, "--teacher", other, "--distill-weight", "0"))
+
+
+def test_resume_keeps_the_teacher(tmp_path):
+    teacher = save_net(tmp_path / "teacher.pt", tiny_net(0), "tiny")
+    assert train_cmd.run(cli_args(tmp_path, "--teacher", teacher, "--distill-weight", "0.5")) == 0
+    for extra, match in ((["--resume"], "--teacher None"),
+                         (["--resume", "--teacher", teacher], r"not --teacher .* \(distill weight 1\)"),
+                         (["--resume", "--teacher", save_net(tmp_path / "t2.pt", tiny_net(3), "tiny"),
+                           "--distill-weight", "0.5"], "t2.pt")):
+        with pytest.raises(CliError, match=match):
+            train_cmd.run(cli_args(tmp_path, *extra))
+    args = cli_args(tmp_path, "--resume", "--teacher", teacher, "--distill-weight", "0.5", "--steps", "3")
+    assert train_cmd.run(args) == 0

@@ -150,7 +150,9 @@ def args(**kw):
     (dict(lovasz_weight=-1.0), "--lovasz-weight -1.0"),
     (dict(freeze_binary=True), "--freeze-binary applies to the continuous stage, not --stage 'binary'"),
     (dict(teacher="missing.pt"), "--teacher 'missing.pt': no such file"),
-    (dict(teacher="missing.pt", stage="continuous"), "--teacher applies to --stage binary, not 'continuous'"),
+    (dict(teacher="missing.pt", stage="continuous"), "--teacher applies to --stage binary, not --stage 'continuous'"),
+    (dict(teacher="missing.pt", stage="all"), "--teacher applies to --stage binary, not --stage 'all'"),
+    (dict(lovasz_weight=float("inf")), "--lovasz-weight inf"),
     (dict(distill_weight=0.5), "--distill-weight needs --teacher"),
 ])
 def test_train_flags_are_validated(kw, match):

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import math
 import os
 import sys
 import tempfile
@@ -46,7 +47,8 @@ def add_parser(sub) -> argparse.ArgumentParser:
                         "to the BCE (default 0)")
     p.add_argument("--teacher", default=None,
                    help="binary stage: also learn the flip-averaged maps of this frozen checkpoint (same config; "
-                        "self-distillation, soft BCE targets beside the ground truth)")
+                        "self-distillation, soft BCE targets beside the ground truth; each step also runs the teacher "
+                        "on both views of its pairs)")
     p.add_argument("--distill-weight", type=float, default=None,
                    help="with --teacher: weight of the distillation BCE beside the ground-truth BCE (default 1)")
     p.add_argument("--freeze-binary", action="store_true",
@@ -74,26 +76,37 @@ def _check(args) -> None:
         raise CliError(f"--warmup-steps {args.warmup_steps}: must be >= 0")
     if not args.out.endswith(".pt"):
         raise CliError(f"--out {args.out!r}: expected a file name ending in .pt")
-    if not args.actor_weight > 0:
-        raise CliError(f"--actor-weight {args.actor_weight}: must be > 0")
-    if not args.lovasz_weight >= 0:
-        raise CliError(f"--lovasz-weight {args.lovasz_weight}: must be >= 0")
+    if not 0 < args.actor_weight < math.inf:
+        raise CliError(f"--actor-weight {args.actor_weight}: must be > 0 and finite")
+    if not 0 <= args.lovasz_weight < math.inf:
+        raise CliError(f"--lovasz-weight {args.lovasz_weight}: must be >= 0 and finite")
     if args.freeze_binary and args.stage not in ("continuous", "all"):
         raise CliError(f"--freeze-binary applies to the continuous stage, not --stage {args.stage!r}")
     if args.teacher is not None:
         if args.stage != "binary":
-            raise CliError(f"--teacher applies to --stage binary, not {args.stage!r}")
+            raise CliError(f"--teacher applies to --stage binary, not --stage {args.stage!r}")
         if not Path(args.teacher).is_file():
             raise CliError(f"--teacher {args.teacher!r}: no such file")
     if args.distill_weight is not None:
         if args.teacher is None:
             raise CliError("--distill-weight needs --teacher")
-        if not args.distill_weight > 0:
-            raise CliError(f"--distill-weight {args.distill_weight}: must be > 0")
+        if not 0 < args.distill_weight < math.inf:
+            raise CliError(f"--distill-weight {args.distill_weight}: must be > 0 and finite")
     if args.resume and args.init:
         raise CliError("--resume and --init exclude each other")
     if args.init and not Path(args.init).is_file():
         raise CliError(f"--init {args.init!r}: no such file")
+
+
+def _check_same_teacher(name: str, meta: dict, teacher: str | None, distill_weight: float) -> None:
+    """A resumed run keeps the teacher and distillation weight it was started with."""
+    old_teacher = meta.get("teacher")
+    old_weight = float(meta.get("train_config", {}).get("distill_weight", 0.0))
+    same = (old_teacher is None) == (teacher is None) and old_weight == distill_weight and (
+        teacher is None or Path(old_teacher).resolve() == Path(teacher).resolve())
+    if not same:
+        raise CliError(f"--resume: {name} was trained with --teacher {old_teacher!r} (distill weight {old_weight:g}), "
+                       f"not --teacher {teacher!r} (distill weight {distill_weight:g})")
 
 
 def write_yaml_atomic(path: Path, data: dict) -> None:
@@ -124,14 +137,17 @@ def run(args) -> int:
     if not args.resume and (paths.last.exists() or paths.csv.exists()):
         raise CliError(f"--out {args.out!r}: a run already exists there ({paths.last.name}); "
                        "pass --resume or choose another --out")
+    if args.teacher and Path(args.teacher).resolve() in (paths.best.resolve(), paths.last.resolve()):
+        raise CliError(f"--teacher {args.teacher!r}: is this run's own checkpoint (--out {args.out!r} writes it)")
     device = pick_device(args.device)
     torch.manual_seed(args.seed)
     if args.init:
         net = init_network(args.init, args.config)
     else:
         net = BinaryTTCNet(get_config(args.config))
-    teacher = None
+    teacher, distill_weight = None, 0.0
     if args.teacher:
+        distill_weight = args.distill_weight or 1.0
         teacher = build_network(load_checkpoint(args.teacher, map_location="cpu"))
         if teacher.config != net.config:
             raise CliError(f"--teacher {args.teacher!r}: its model config differs from --config {args.config!r}")
@@ -145,8 +161,10 @@ def run(args) -> int:
     stages = list(STAGES) if args.stage == "all" else [args.stage]
     resume_stage = None
     if args.resume:
-        state = load_checkpoint(paths.last, map_location="cpu", expected_config=args.config).get("train_state", {})
+        last = load_checkpoint(paths.last, map_location="cpu", expected_config=args.config)
+        state, meta_last = last.get("train_state", {}), last.get("train_meta", {})
         resume_stage = state.get("stage")
+        _check_same_teacher(paths.last.name, meta_last, args.teacher, distill_weight)
         if resume_stage not in stages:
             raise CliError(f"--resume: {paths.last.name} is at stage {resume_stage!r}, not in {stages}")
         stages = stages[stages.index(resume_stage):]
@@ -154,7 +172,7 @@ def run(args) -> int:
     base = TrainConfig(steps=args.steps, batch_size=args.batch_size, lr=args.lr, warmup_steps=args.warmup_steps,
                        val_every=args.val_every, val_limit=args.val_limit, seed=args.seed,
                        actor_weight=args.actor_weight, lovasz_weight=args.lovasz_weight,
-                       distill_weight=(args.distill_weight or 1.0) if teacher is not None else 0.0)
+                       distill_weight=distill_weight)
     write_yaml_atomic(paths.config, {
         "argv": list(sys.argv),
         "data": args.data, "device": str(device), "stages": stages,

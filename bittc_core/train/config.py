@@ -23,8 +23,8 @@ class TrainConfig:
     train_eta_max: float = 1.1  # > 1: receding thresholds too (their negatives matter)
     actor_weight: float = 1.0  # binary TTC loss weight of moving-actor pixels (instance > 0), static 1
     lovasz_weight: float = 0.0  # binary stage: + this x Lovasz two-class IoU surrogate per map
-    # binary stage: + this x BCE towards a frozen teacher's flip-averaged maps (``train.distill``);
-    # > 0 needs a teacher network of the same config
+    # binary stage: + this x BCE towards a frozen teacher's flip-averaged maps (``train.distill``;
+    # pixels weighted as in the ground-truth BCE); > 0 needs a teacher network of the same config
     distill_weight: float = 0.0
     ttc_weight: float = 0.8  # paper: binary TTC 0.8, binary flow 0.2
     flow_weight: float = 0.2

@@ -1,7 +1,7 @@
 """Self-distillation targets: a frozen teacher's flip-averaged geofence logits.
 
 Flip averaging (``bittc_core.model.flip``) makes a better estimator than one pass of
-the same weights at twice the cost; training a student towards the averaged maps of a
+the same weights at about twice the cost; training a student towards the averaged maps of a
 frozen teacher (soft BCE targets beside the ground truth) moves part of that gain into
 the single pass, at no inference cost.
 """

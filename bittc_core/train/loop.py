@@ -3,7 +3,8 @@
 Stages: ``flow``: binary-flow pre-training, TTC head unsupervised; ``binary``: binary
 TTC (several eta thresholds per pair, moving-actor pixels weighted ``actor_weight``; BCE,
 plus ``lovasz_weight`` x a Lovasz surrogate of the per-map two-class IoU, plus
-``distill_weight`` x BCE towards a frozen teacher's flip-averaged maps) + binary flow
+``distill_weight`` x BCE towards a frozen teacher's flip-averaged maps, actor pixels
+weighted alike) + binary flow
 auxiliary, weights 0.8 / 0.2;
 ``continuous``: the stacked TTC volume, BCE on its maps (0.1) + SmoothL1 on the AUC and
 refined log eta (0.9), still with the flow auxiliary (0.8 / 0.2); with
@@ -75,11 +76,13 @@ class Trainer:
                  meta: dict | None = None, teacher: BinaryTTCNet | None = None) -> None:
         if cfg.distill_weight > 0 and teacher is None:
             raise ValueError(f"distill_weight={cfg.distill_weight} needs a teacher network")
-        if teacher is not None and teacher.config != net.config:
-            raise ValueError("the teacher's model config differs from the student's")
+        if teacher is not None and cfg.distill_weight <= 0:
+            raise ValueError("a teacher network needs distill_weight > 0")
+        if teacher is not None and (teacher is net or teacher.config != net.config):
+            raise ValueError("the teacher must be another network of the student's model config")
         self.net = net.to(device)
-        # frozen, eval mode (its batch-norm statistics stay put); only used with distill_weight > 0
-        self.teacher = teacher.to(device).eval().requires_grad_(False) if cfg.distill_weight > 0 else None
+        # frozen, eval mode (its batch-norm statistics stay put)
+        self.teacher = teacher.to(device).eval().requires_grad_(False) if teacher is not None else None
         self.config_name = config_name
         self.cfg = cfg
         self.device = device
