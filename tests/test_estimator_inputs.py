@@ -187,6 +187,26 @@ def test_oracle_is_exact_and_needs_ground_truth():
         oracle.geofence(frame(0), frame(1), [1.0])
 
 
+def test_oracle_auc_quantizes_eta_to_the_volume():
+    from bittc_core.estimator import make_estimator
+
+    oracle = OracleEstimator(dt_s=0.1, auc_volume=(0.6, 1.2, 24))  # maps at 0.6125, 0.6375, ...
+    assert oracle.name == "oracle-auc"
+    eta = np.full((H, W), 0.9, np.float32)
+    eta[:, :10] = 0.91  # any eta in (0.8875, 0.9125], between two maps, comes out 0.9
+    eta[:, 10:20] = 0.5  # below the volume: clamps to its lower end
+    eta[:, 20:30] = 1.5  # above: clamps to the upper end
+    oracle.set_ground_truth(eta)
+    hat = oracle.motion_in_depth(frame(0), frame(1))
+    np.testing.assert_allclose(hat[0, [0, 15, 25, 50]], [0.9, 0.6, 1.2, 0.9], atol=1e-6)
+    p = oracle.geofence(frame(0), frame(1), [0.5, 2.0])  # the geofences stay exact
+    assert p[1, :, :10].all() and not p[0, :, :10].any()
+    with pytest.raises(EstimatorInputError, match="auc_volume"):
+        OracleEstimator(auc_volume=(1.2, 0.6, 24))
+    shipped = make_estimator("oracle-auc")
+    assert shipped.auc_volume == (0.6, 1.2, 24)  # the shipped config's continuous volume
+
+
 def test_flow_baseline_recovers_a_pure_expansion():
     cfg = SyntheticConfig(height_px=96, width_px=192, patches=(0, 0), background_eta=(0.9, 0.9),
                           max_translation_px=0.0, noise_std=0.0)

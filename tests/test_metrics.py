@@ -158,6 +158,10 @@ def test_eval_of_the_oracle_is_perfect_and_writes_json(tmp_path):
     with pytest.raises(CliError, match="--tta 'flip' applies to --method bittc only"):
         eval_cmd.run(argparse.Namespace(**{**vars(a), "tta": "flip"}))
     assert not list(tmp_path.glob(".*.tmp"))
+    # oracle-auc: exact geofences, the continuous output quantized by the AUC volume
+    assert eval_cmd.run(argparse.Namespace(**{**vars(a), "method": "oracle-auc"})) == 0
+    r = json.loads(out.read_text())
+    assert r["miou"] == pytest.approx(1.0) and r["method"] == "oracle-auc" and 0 < r["mid"] < 300
 
 
 def test_eval_tta_modes_match_the_estimator():

@@ -1,4 +1,4 @@
-"""`bittc eval --data DIR --method {bittc,flow,oracle}`: metrics of an estimator.
+"""`bittc eval --data DIR --method {bittc,flow,oracle,oracle-auc}`: metrics of an estimator.
 
 Prints a table and writes a JSON file (--out, default eval_<method>_<split>.json)
 with miou, mid, error_rate, actor_iou, latency_ms and a breakdown of where the
@@ -19,7 +19,7 @@ from pathlib import Path
 from bittc_core.cli.common import add_device_flag, check_device
 from bittc_core.errors import CliError
 
-METHODS = ("bittc", "flow", "oracle")
+METHODS = ("bittc", "flow", "oracle", "oracle-auc")
 TTA_MODES = ("none", "flip")  # bittc_core.estimator.TTA_MODES, kept here so --help imports no torch
 SPLITS = ("train", "val", "test")
 
@@ -28,7 +28,8 @@ def add_parser(sub) -> argparse.ArgumentParser:
     p = sub.add_parser("eval", help="evaluate an estimator on a dataset split",
                        description=__doc__.split("\n\n", 1)[1])
     p.add_argument("--data", required=True, help="dataset folder, or 'synthetic'")
-    p.add_argument("--method", required=True, help="bittc, flow or oracle")
+    p.add_argument("--method", required=True, help="bittc, flow, oracle, or oracle-auc (exact geofences; "
+                   "continuous output from their AUC at the shipped network's levels: the floor of its AUC)")
     p.add_argument("--weights", default=None, help="checkpoint for bittc (default: shipped weights)")
     p.add_argument("--out", default=None, help="JSON file to write")
     p.add_argument("--split", default="test", help="train, val or test (default test)")

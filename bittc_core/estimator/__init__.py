@@ -1,17 +1,19 @@
 """Estimators of binary / quantized / continuous TTC behind one interface.
 
-``make_estimator("bittc" | "flow" | "oracle", weights=None, device="auto", tta="none")``;
+``make_estimator("bittc" | "flow" | "oracle" | "oracle-auc", weights=None, device="auto", tta="none")``;
+``oracle-auc``: exact geofences, continuous output from their AUC at the shipped network's levels;
 ``tta="flip"`` (network only) averages each call over the plain and the mirrored frames.
 """
 
 from __future__ import annotations
 
+from bittc_core.checkpoint import DEFAULT_WEIGHTS, load_checkpoint
 from bittc_core.estimator.base import Estimator, EstimatorInputError, quantize
 from bittc_core.estimator.flow import FlowBaselineConfig, FlowEstimator
 from bittc_core.estimator.network import TTA_MODES, BittcEstimator
 from bittc_core.estimator.oracle import OracleEstimator
 
-METHODS = ("bittc", "flow", "oracle")
+METHODS = ("bittc", "flow", "oracle", "oracle-auc")
 
 
 def make_estimator(method: str, weights: str | None = None, device: str = "auto",
@@ -26,6 +28,9 @@ def make_estimator(method: str, weights: str | None = None, device: str = "auto"
         raise EstimatorInputError(f"tta={tta!r} only applies to method 'bittc', not {method!r}")
     if method == "flow":
         return FlowEstimator()
+    if method == "oracle-auc":
+        c = load_checkpoint(DEFAULT_WEIGHTS, map_location="cpu")["model_config"]
+        return OracleEstimator(dt_s=c.frame_dt_s, auc_volume=(c.cont_eta_min, c.cont_eta_max, c.cont_levels))
     return OracleEstimator()
 
 
