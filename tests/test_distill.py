@@ -8,16 +8,15 @@ import torch
 
 from bittc_core.cli import train_cmd
 from bittc_core.checkpoint import make_payload, save_checkpoint
-from bittc_core.data.synthetic import SyntheticConfig, SyntheticPairs
 from bittc_core.errors import CliError
 from bittc_core.model import BinaryTTCNet, get_config
 from bittc_core.model.flip import flip_views, merge_flip_views
-from bittc_core.train import RunPaths, TrainConfig, Trainer
+from bittc_core.train import TrainConfig
 from bittc_core.train.distill import flip_averaged_logits
 from bittc_core.train.losses import masked_bce
 from bittc_core.train.targets import sample_eta, sample_shifts_px, valid_mask
-
-SMALL = SyntheticConfig(height_px=48, width_px=96, patch_half_size_px=(6.0, 20.0), max_translation_px=6.0)
+from tests import train_helpers
+from tests.train_helpers import fit_fixed_batch
 
 
 def tiny_net(seed: int) -> BinaryTTCNet:
@@ -55,10 +54,7 @@ def test_flip_averaged_logits_are_the_mean_of_both_views():
 
 
 def make_trainer(tmp_path, teacher, **kw):
-    cfg = TrainConfig(stage="binary", steps=30, batch_size=4, lr=3e-3, warmup_steps=3, val_every=30,
-                      val_limit=4, log_every=5, **kw)
-    return Trainer(tiny_net(1), "tiny", cfg, SyntheticPairs(16, SMALL, seed=1), SyntheticPairs(4, SMALL, seed=2),
-                   torch.device("cpu"), RunPaths.from_out(tmp_path / "m.pt"), teacher=teacher)
+    return train_helpers.make_trainer(tmp_path, net_seed=1, teacher=teacher, **kw)
 
 
 @pytest.mark.parametrize("actor_weight", [1.0, 2.0])
@@ -106,14 +102,7 @@ def _teacher_gap_after_steps(tmp_path, distill_weight: float) -> tuple[float, fl
         return float((student - soft).abs().mean())
 
     before = gap()
-    for step in range(15):
-        for g in tr.opt.param_groups:
-            g["lr"] = tr.lr_at(step)
-        tr.gen.manual_seed(0)
-        loss = tr.losses(batch)["loss"]
-        tr.opt.zero_grad()
-        loss.backward()
-        tr.opt.step()
+    fit_fixed_batch(tr, batch, 15)
     return before, gap()
 
 

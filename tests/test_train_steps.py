@@ -6,41 +6,18 @@ import pytest
 import torch
 
 from bittc_core.cli import train_cmd
-from bittc_core.data.synthetic import SyntheticConfig, SyntheticPairs
 from bittc_core.errors import CliError
-from bittc_core.model import BinaryTTCNet, get_config
-from bittc_core.train import RunPaths, TrainConfig, Trainer
+from bittc_core.train import TrainConfig
 from bittc_core.metrics import class_counts, two_class_iou
 from bittc_core.train.losses import lovasz_two_class, masked_bce
 from bittc_core.train.targets import eta_labels, shift_labels
-
-SMALL = SyntheticConfig(height_px=48, width_px=96, patch_half_size_px=(6.0, 20.0), max_translation_px=6.0)
-
-
-def make_trainer(tmp_path, stage, steps=30, **kw):
-    torch.manual_seed(0)
-    cfg = TrainConfig(stage=stage, steps=steps, batch_size=4, lr=3e-3, warmup_steps=3,
-                      val_every=steps, val_limit=4, log_every=5, **kw)
-    data = SyntheticPairs(16, SMALL, seed=1)
-    return Trainer(BinaryTTCNet(get_config("tiny")), "tiny", cfg, data, SyntheticPairs(4, SMALL, seed=2),
-                   torch.device("cpu"), RunPaths.from_out(tmp_path / "m.pt"))
-
+from tests.train_helpers import fit_fixed_batch, make_trainer
 
 @pytest.mark.parametrize("stage, actor_weight, lovasz_weight",
                          [("flow", 1.0, 0.0), ("binary", 1.0, 0.0), ("binary", 3.0, 0.0), ("binary", 1.0, 0.5)])
 def test_a_few_steps_lower_the_loss(tmp_path, stage, actor_weight, lovasz_weight):
     tr = make_trainer(tmp_path, stage, actor_weight=actor_weight, lovasz_weight=lovasz_weight)
-    batch = next(iter(tr.loader))  # one fixed batch: the loss must go down on it
-    losses = []
-    for step in range(30):
-        for g in tr.opt.param_groups:
-            g["lr"] = tr.lr_at(step)
-        tr.gen.manual_seed(0)  # same hypotheses each step
-        loss = tr.losses(batch)["loss"]
-        tr.opt.zero_grad()
-        loss.backward()
-        tr.opt.step()
-        losses.append(loss.item())
+    losses = fit_fixed_batch(tr, next(iter(tr.loader)), 30)  # one fixed batch: the loss must go down on it
     assert sum(losses[-3:]) / 3 < 0.8 * sum(losses[:3]) / 3, losses
 
 

@@ -1,0 +1,37 @@
+"""Small trainers shared by the training tests: a tiny network on synthetic pairs."""
+
+from __future__ import annotations
+
+import torch
+
+from bittc_core.data.synthetic import SyntheticConfig, SyntheticPairs
+from bittc_core.model import BinaryTTCNet, get_config
+from bittc_core.train import RunPaths, TrainConfig, Trainer
+
+SMALL = SyntheticConfig(height_px=48, width_px=96, patch_half_size_px=(6.0, 20.0), max_translation_px=6.0)
+
+
+def make_trainer(tmp_path, stage: str = "binary", steps: int = 30, *, net_seed: int = 0,
+                 teacher: BinaryTTCNet | None = None, **kw) -> Trainer:
+    """A trainer of a ``tiny`` network (weights drawn with ``net_seed``) on 16 synthetic pairs."""
+    cfg = TrainConfig(stage=stage, steps=steps, batch_size=4, lr=3e-3, warmup_steps=3,
+                      val_every=steps, val_limit=4, log_every=5, **kw)
+    torch.manual_seed(net_seed)
+    net = BinaryTTCNet(get_config("tiny"))
+    return Trainer(net, "tiny", cfg, SyntheticPairs(16, SMALL, seed=1), SyntheticPairs(4, SMALL, seed=2),
+                   torch.device("cpu"), RunPaths.from_out(tmp_path / "m.pt"), teacher=teacher)
+
+
+def fit_fixed_batch(tr: Trainer, batch: dict, steps: int) -> list[float]:
+    """``steps`` optimiser steps on one batch with the same hypotheses each step; the losses."""
+    losses = []
+    for step in range(steps):
+        for g in tr.opt.param_groups:
+            g["lr"] = tr.lr_at(step)
+        tr.gen.manual_seed(0)  # same hypotheses each step
+        loss = tr.losses(batch)["loss"]
+        tr.opt.zero_grad()
+        loss.backward()
+        tr.opt.step()
+        losses.append(loss.item())
+    return losses
