@@ -64,6 +64,21 @@ def test_run_writes_outputs_and_resume_restores_state(tmp_path):
         wrong.resume()
 
 
+def test_resume_drops_the_log_rows_it_will_redo(tmp_path):
+    import csv
+
+    tr = make_trainer(tmp_path, "binary", steps=4)
+    tr.run()  # the resumable checkpoint is at step 4
+    with open(tr.paths.csv, "a", newline="") as f:  # a run killed later logged steps it never saved
+        f.write("5,binary,0.1\n6,binary,0.1\n9,flow,0.2\n")
+    again = make_trainer(tmp_path, "binary", steps=6)
+    again.resume()
+    rows = list(csv.DictReader(open(tr.paths.csv)))
+    assert [(r["stage"], r["step"]) for r in rows] == [("binary", "4"), ("flow", "9")]
+    again.run()
+    assert [r["step"] for r in csv.DictReader(open(tr.paths.csv)) if r["stage"] == "binary"] == ["4", "5", "6"]
+
+
 def test_weighted_bce():
     logits = torch.tensor([[[2.0, -1.0, 0.5]]])
     labels = torch.tensor([[[1.0, 1.0, 0.0]]])
@@ -142,3 +157,15 @@ def test_train_cli_refuses_to_overwrite_a_run(tmp_path):
     (tmp_path / "m.last.pt").write_bytes(b"x")
     with pytest.raises(CliError, match="pass --resume"):
         train_cmd.run(args(out=str(out)))
+
+
+def test_config_yaml_records_each_stage_as_it_runs(tmp_path):
+    import yaml
+
+    out = tmp_path / "m.pt"
+    assert train_cmd.run(args(out=str(out), stage="continuous", freeze_binary=True, steps=2, val_every=2,
+                              val_limit=2, actor_weight=2.0)) == 0
+    saved = yaml.safe_load((tmp_path / "m.config.yaml").read_text())
+    assert saved["stages"] == ["continuous"]
+    cfg = saved["train_config"]["continuous"]
+    assert cfg["stage"] == "continuous" and cfg["freeze_binary"] is True and cfg["actor_weight"] == 2.0

@@ -173,16 +173,18 @@ def run(args) -> int:
                        val_every=args.val_every, val_limit=args.val_limit, seed=args.seed,
                        actor_weight=args.actor_weight, lovasz_weight=args.lovasz_weight,
                        distill_weight=distill_weight)
+    stage_cfgs = {stage: dataclasses.replace(base, stage=stage,
+                                             freeze_binary=args.freeze_binary and stage == "continuous")
+                  for stage in stages}
     write_yaml_atomic(paths.config, {
         "argv": list(sys.argv),
         "data": args.data, "device": str(device), "stages": stages,
         "model_config_name": args.config, "teacher": args.teacher,
         "model_config": dataclasses.asdict(net.config),
-        "train_config": dataclasses.asdict(base),
+        "train_config": {stage: dataclasses.asdict(cfg) for stage, cfg in stage_cfgs.items()},  # as each stage runs
     })
     meta = {"data": args.data, "seed": args.seed, **({"teacher": args.teacher} if args.teacher else {})}
-    for stage in stages:
-        cfg = dataclasses.replace(base, stage=stage, freeze_binary=args.freeze_binary and stage == "continuous")
+    for stage, cfg in stage_cfgs.items():
         trainer = Trainer(net, args.config, cfg, train_set, val_set, device, paths, meta, teacher=teacher)
         if stage == resume_stage:
             trainer.resume()

@@ -21,6 +21,7 @@ from __future__ import annotations
 import csv
 import dataclasses
 import math
+import os
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -209,6 +210,23 @@ class Trainer:
         self.gen.set_state(state["gen"])
         self.loader_gen.set_state(state["loader_gen"])
         torch.set_rng_state(state["torch_rng"])
+        self._trim_log()
+
+    def _trim_log(self) -> None:
+        """Drop this stage's log rows after the resumed step: the resumed run logs those steps again."""
+        if not self.paths.csv.exists():
+            return
+        with open(self.paths.csv, newline="") as f:
+            rows = list(csv.DictReader(f))
+        keep = [r for r in rows if r.get("stage") != self.cfg.stage or int(r["step"]) <= self.step]
+        if len(keep) == len(rows):
+            return
+        tmp = self.paths.csv.with_name(self.paths.csv.name + ".tmp")
+        with open(tmp, "w", newline="") as f:
+            writer = csv.DictWriter(f, fieldnames=CSV_FIELDS)
+            writer.writeheader()
+            writer.writerows({k: r.get(k, "") for k in CSV_FIELDS} for r in keep)
+        os.replace(tmp, self.paths.csv)
 
     # -- loop ---------------------------------------------------------------------------
     def _log(self, row: dict) -> None:
