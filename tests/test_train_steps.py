@@ -13,6 +13,7 @@ from bittc_core.train.losses import lovasz_two_class, masked_bce
 from bittc_core.train.targets import eta_labels, shift_labels
 from tests.train_helpers import fit_fixed_batch, make_trainer
 
+
 @pytest.mark.parametrize("stage, actor_weight, lovasz_weight",
                          [("flow", 1.0, 0.0), ("binary", 1.0, 0.0), ("binary", 3.0, 0.0), ("binary", 1.0, 0.5)])
 def test_a_few_steps_lower_the_loss(tmp_path, stage, actor_weight, lovasz_weight):

@@ -11,11 +11,10 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
-import tempfile
 import time
 from pathlib import Path
 
+from bittc_core.atomic import write_text_atomic
 from bittc_core.cli.common import add_device_flag, check_device
 from bittc_core.errors import CliError
 
@@ -123,9 +122,6 @@ def run(args) -> int:
     result = {"method": args.method, "split": args.split, "data": args.data,
               "weights": args.weights, "tta": args.tta, **evaluate(estimator, dataset, args.limit)}
     print(format_table(result))
-    fd, tmp = tempfile.mkstemp(prefix=f".{out.name}.", suffix=".tmp", dir=out.parent)
-    with os.fdopen(fd, "w") as f:
-        json.dump(result, f, indent=2)
-    os.replace(tmp, out)
+    write_text_atomic(out, json.dumps(result, indent=2))
     print(f"wrote {out}")
     return 0

@@ -10,11 +10,10 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import math
-import os
 import sys
-import tempfile
 from pathlib import Path
 
+from bittc_core.atomic import write_text_atomic
 from bittc_core.cli.common import add_device_flag, check_device
 from bittc_core.errors import CliError
 
@@ -112,10 +111,7 @@ def _check_same_teacher(name: str, meta: dict, teacher: str | None, distill_weig
 def write_yaml_atomic(path: Path, data: dict) -> None:
     import yaml
 
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    with os.fdopen(fd, "w") as f:
-        yaml.safe_dump(data, f, sort_keys=False)
-    os.replace(tmp, path)
+    write_text_atomic(path, yaml.safe_dump(data, sort_keys=False))
 
 
 def run(args) -> int:

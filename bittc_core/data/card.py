@@ -3,10 +3,10 @@
 from __future__ import annotations
 
 import json
-import os
 from dataclasses import asdict
 from pathlib import Path
 
+from bittc_core.atomic import write_text_atomic
 from bittc_core.data.format import FORMAT_VERSION, SPLITS, TAU_BIN_EDGES_S, tau_bin_labels
 
 CARD = "dataset_card.json"
@@ -51,15 +51,9 @@ def summarize(rows: list[dict]) -> dict:
             "largest_bin_share": max(share.values())}  # fmt: skip
 
 
-def _atomic(path: Path, text: str) -> None:
-    tmp = path.with_name(f".{path.name}.tmp")
-    tmp.write_text(text)
-    os.replace(tmp, path)
-
-
 def rebuild_manifest_and_card(out: Path, cfg, run: dict | None = None) -> dict:
     rows = scan(out)
-    _atomic(out / MANIFEST, "".join(json.dumps({k: v for k, v in r.items() if not k.startswith("_")}) + "\n" for r in rows))
+    write_text_atomic(out / MANIFEST, "".join(json.dumps({k: v for k, v in r.items() if not k.startswith("_")}) + "\n" for r in rows))
     card_path = out / CARD
     runs = []
     if card_path.exists():
@@ -78,5 +72,5 @@ def rebuild_manifest_and_card(out: Path, cfg, run: dict | None = None) -> dict:
         "notes": "tau from the latest frame's capture time; histogram over actor pixels (instance > 0) of the "
                  "latest pair; timings in generation_runs vary between machines and runs.",
     }  # fmt: skip
-    _atomic(card_path, json.dumps(card, indent=2) + "\n")
+    write_text_atomic(card_path, json.dumps(card, indent=2) + "\n")
     return card

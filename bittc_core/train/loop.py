@@ -20,8 +20,8 @@ from __future__ import annotations
 
 import csv
 import dataclasses
+import io
 import math
-import os
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -30,9 +30,9 @@ import torch
 from torch.utils.data import DataLoader, Dataset
 from tqdm import tqdm
 
+from bittc_core.atomic import write_text_atomic
 from bittc_core.checkpoint import load_checkpoint, make_payload, save_checkpoint
 from bittc_core.model import BinaryTTCNet
-from bittc_core.model.auc import auc_eta
 from bittc_core.train.config import TrainConfig
 from bittc_core.train.distill import flip_averaged_logits
 from bittc_core.train.losses import lovasz_two_class, masked_bce, masked_smooth_l1
@@ -221,12 +221,11 @@ class Trainer:
         keep = [r for r in rows if r.get("stage") != self.cfg.stage or int(r["step"]) <= self.step]
         if len(keep) == len(rows):
             return
-        tmp = self.paths.csv.with_name(self.paths.csv.name + ".tmp")
-        with open(tmp, "w", newline="") as f:
-            writer = csv.DictWriter(f, fieldnames=CSV_FIELDS)
-            writer.writeheader()
-            writer.writerows({k: r.get(k, "") for k in CSV_FIELDS} for r in keep)
-        os.replace(tmp, self.paths.csv)
+        buf = io.StringIO()
+        writer = csv.DictWriter(buf, fieldnames=CSV_FIELDS)
+        writer.writeheader()
+        writer.writerows({k: r.get(k, "") for k in CSV_FIELDS} for r in keep)
+        write_text_atomic(self.paths.csv, buf.getvalue())
 
     # -- loop ---------------------------------------------------------------------------
     def _log(self, row: dict) -> None:
