@@ -19,6 +19,7 @@ import torch
 
 from bittc_core.errors import CliError
 from bittc_core.model import CONFIGS, BinaryTTCNet, ModelConfig, get_config
+from bittc_core.model.config import GROWTH_COUNTS, GROWTH_FLAGS
 
 DEFAULT_WEIGHTS = Path(__file__).resolve().parent / "weights" / "bittc_default.pt"
 TRAIN_DEFAULT_HINT = (
@@ -116,8 +117,9 @@ def build_network(ckpt: dict) -> BinaryTTCNet:
 def init_network(path: str | os.PathLike, config_name: str) -> BinaryTTCNet:
     """A network of config ``config_name`` starting from the weights of ``path``.
 
-    The checkpoint's config must be that config, or that config without the
-    global-context block (``ModelConfig.global_context``): the block then keeps its
+    The checkpoint's config must be that config, or one it grows from: the same sizes
+    with fewer growth blocks or without the global-context block (``GROWTH_COUNTS``,
+    ``GROWTH_FLAGS`` in ``bittc_core.model.config``). The added modules keep their
     initialisation, the identity, so the network computes what the checkpoint did.
     """
     ckpt = load_checkpoint(path, map_location="cpu")
@@ -125,17 +127,28 @@ def init_network(path: str | os.PathLike, config_name: str) -> BinaryTTCNet:
     if name == config_name:
         _check_config(ckpt, path, config_name)
         return build_network(ckpt)
-    if (CONFIGS.get(name) != source or source.global_context
-            or dataclasses.replace(source, global_context=True) != target):
+    if CONFIGS.get(name) != source or not grows_into(source, target):
         raise CheckpointError(f"--init {str(path)!r}: its config ({name!r}) is neither "
-                              f"{config_name!r} nor {config_name!r} without the global-context block")
+                              f"{config_name!r} nor a config {config_name!r} grows from "
+                              "(the same sizes with fewer growth blocks or no global-context block)")
     net = BinaryTTCNet(target)
+    added = set(net.state_dict()) - set(BinaryTTCNet(source).state_dict())
     missing, unexpected = net.load_state_dict(ckpt["state_dict"], strict=False)
-    added = set(missing) - {f"segnet.context.{k}" for k in net.segnet.context.state_dict()}
-    if added or unexpected:
+    # (batch norm fills in a missing num_batches_tracked itself, so it is never missing)
+    if not set(missing) <= added or unexpected:
         raise CheckpointError(f"--init {str(path)!r}: weights do not fit config {config_name!r} "
-                              f"(missing {sorted(added)}, unexpected {unexpected})")
+                              f"(missing {sorted(set(missing) - added)}, unexpected {unexpected})")
     return net
+
+
+def grows_into(source: ModelConfig, target: ModelConfig) -> bool:
+    """True when ``target`` is ``source`` plus identity-at-init modules only."""
+    if source == target:
+        return False
+    grown = {n: getattr(target, n) for n in (*GROWTH_COUNTS, *GROWTH_FLAGS)}
+    if dataclasses.replace(source, **grown) != target:
+        return False  # some other field differs
+    return all(getattr(source, n) <= getattr(target, n) for n in (*GROWTH_COUNTS, *GROWTH_FLAGS))
 
 
 def pick_device(name: str = "auto") -> torch.device:

@@ -1,13 +1,14 @@
 """Checkpoint round trip, wrong config, corrupt file, missing default weights, --init
-across the global-context block, the release copy."""
+across growth (the global-context block, growth blocks), the release copy."""
 
 import dataclasses
 
 import pytest
 import torch
 
-from bittc_core.checkpoint import (DEFAULT_WEIGHTS, REQUIRED_KEYS, CheckpointError, build_network, init_network,
-                                   load_checkpoint, make_payload, release_payload, save_checkpoint)
+from bittc_core.checkpoint import (DEFAULT_WEIGHTS, REQUIRED_KEYS, CheckpointError, build_network, grows_into,
+                                   init_network, load_checkpoint, make_payload, release_payload,
+                                   save_checkpoint)
 from bittc_core.model import BinaryTTCNet, get_config
 
 
@@ -81,7 +82,7 @@ def test_init_adds_the_global_context_block_as_the_identity(tmp_path):
 def test_init_refuses_other_configs(tmp_path):
     path = tmp_path / "tiny.pt"
     save_checkpoint(path, make_payload(BinaryTTCNet(get_config("tiny")), "tiny", {}))
-    with pytest.raises(CheckpointError, match="neither 'cpu-small-gc' nor 'cpu-small-gc' without"):
+    with pytest.raises(CheckpointError, match="neither 'cpu-small-gc' nor a config 'cpu-small-gc' grows from"):
         init_network(path, "cpu-small-gc")
     # the block is only ever added, never dropped
     save_checkpoint(path, make_payload(BinaryTTCNet(get_config("cpu-small-gc")), "cpu-small-gc", {}))
@@ -94,6 +95,33 @@ def test_init_refuses_other_configs(tmp_path):
         init_network(path, "cpu-small")
     with pytest.raises(CheckpointError, match="'mine'"):
         init_network(path, "cpu-small-gc")
+
+
+def test_init_grows_cpu_small_into_cpu_medium_as_the_identity(tmp_path):
+    torch.manual_seed(0)
+    plain = BinaryTTCNet(get_config("cpu-small")).eval()
+    path = tmp_path / "plain.pt"
+    save_checkpoint(path, make_payload(plain, "cpu-small", {}))
+    net = init_network(path, "cpu-medium").eval()
+    assert net.config == get_config("cpu-medium") and len(net.features.extra) == 3
+    with torch.no_grad():
+        torch.testing.assert_close(net(*_frames()), plain(*_frames()), rtol=0, atol=0)
+        # the added blocks are live: a non-zero last norm changes the logits
+        net.segnet.dec_extra[-1][0].body[2].weight.fill_(0.5)
+        assert not torch.allclose(net(*_frames()), plain(*_frames()))
+    # never shrunk: cpu-medium does not go back to cpu-small, nor across to cpu-small-gc
+    save_checkpoint(path, make_payload(net, "cpu-medium", {}))
+    for other in ("cpu-small", "cpu-small-gc"):
+        with pytest.raises(CheckpointError, match=f"neither '{other}' nor a config '{other}' grows from"):
+            init_network(path, other)
+
+
+def test_grows_into_only_adds_identity_modules():
+    tiny = get_config("tiny")
+    assert grows_into(tiny, dataclasses.replace(tiny, refine_extra_blocks=2, global_context=True))
+    assert not grows_into(tiny, tiny)  # nothing added
+    assert not grows_into(dataclasses.replace(tiny, dec_extra_blocks=2), dataclasses.replace(tiny, dec_extra_blocks=1))
+    assert not grows_into(tiny, dataclasses.replace(tiny, dec_extra_blocks=1, feat_channels=12))  # resized
 
 
 def test_release_payload_drops_training_state(tmp_path):

@@ -111,7 +111,42 @@ def test_registered_config_sizes():
         paper = count_parameters(BinaryTTCNet(CONFIGS["paper"]))
         small = count_parameters(BinaryTTCNet(CONFIGS["cpu-small"]))
         gc = count_parameters(BinaryTTCNet(CONFIGS["cpu-small-gc"]))
+        medium = count_parameters(BinaryTTCNet(CONFIGS["cpu-medium"]))
         tiny = count_parameters(BinaryTTCNet(CONFIGS["tiny"]))
     assert 88e6 < paper < 94e6  # "about 91 M"
     assert tiny < small < gc < 2e6  # cpu-small-gc = cpu-small + the global-context block
+    assert small < medium < 2e6  # cpu-medium = cpu-small + growth blocks
     assert CONFIGS["paper"].norm == "none" and CONFIGS["cpu-small"].norm != "none"
+
+
+@pytest.mark.parametrize("field", ["feat_extra_blocks", "dec_extra_blocks", "refine_extra_blocks"])
+def test_growth_blocks_start_as_the_identity(field):
+    """A config with added growth blocks, loaded with the smaller config's weights,
+    computes the same geofences and continuous output. In train mode too, except for
+    decoder blocks: the finest level then runs on a wider crop, so its batch norm
+    takes its statistics over more pixels."""
+    torch.manual_seed(0)
+    small = BinaryTTCNet(CONFIGS["tiny"])
+    grown = BinaryTTCNet(dataclasses.replace(CONFIGS["tiny"], **{field: 2}))
+    missing, unexpected = grown.load_state_dict(small.state_dict(), strict=False)
+    assert missing and not unexpected and all(".extra" in k or "dec_extra" in k for k in missing)
+    prev, latest = torch.rand(2, 3, 48, 96), torch.rand(2, 3, 48, 96)
+    eta = torch.tensor([[0.8, 1.0], [0.9, 1.1]])
+    for train in (False,) if field == "dec_extra_blocks" else (True, False):
+        small.train(train)
+        grown.train(train)
+        with torch.no_grad():
+            torch.testing.assert_close(grown(prev, latest, eta), small(prev, latest, eta), rtol=0, atol=0)
+    small.eval()
+    grown.eval()
+    with torch.no_grad():
+        outs = []
+        for n in (small, grown):
+            feats = n.extract(torch.cat((prev, latest)))
+            outs.append(n.continuous(n.prepare_reference(feats[2:], latest), feats[:2]).log_eta)
+    torch.testing.assert_close(outs[1], outs[0], rtol=0, atol=0)
+
+
+def test_growth_counts_must_not_be_negative():
+    with pytest.raises(ValueError, match="dec_extra_blocks=-1"):
+        dataclasses.replace(CONFIGS["tiny"], dec_extra_blocks=-1)

@@ -24,11 +24,11 @@ def add_parser(sub) -> argparse.ArgumentParser:
     p = sub.add_parser("train", help="train the Binary-TTC network",
                        description=__doc__.split("\n\n", 1)[1])
     p.add_argument("--data", required=True, help="dataset folder, or 'synthetic' for the built-in generator")
-    p.add_argument("--config", required=True, help="model config name (paper, cpu-small, cpu-small-gc, tiny)")
+    p.add_argument("--config", required=True, help="model config name (paper, cpu-small, cpu-small-gc, cpu-medium, tiny)")
     p.add_argument("--out", required=True, help="best checkpoint path, *.pt")
     p.add_argument("--resume", action="store_true", help="continue from <stem>.last.pt")
-    p.add_argument("--init", default=None, help="start from the weights of this checkpoint (same config, or the config "
-                   "without the global-context block: the block then starts as the identity)")
+    p.add_argument("--init", default=None, help="start from the weights of this checkpoint (same config, or a config "
+                   "this one grows from, such as cpu-small for cpu-medium: the added blocks start as the identity)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--steps", type=int, default=2000, help="optimiser steps per stage (default 2000)")
     p.add_argument("--batch-size", type=int, default=8)

@@ -19,6 +19,13 @@ import dataclasses
 from dataclasses import dataclass, field
 
 NORMS = ("none", "batch", "group")
+#: Growth fields: raising one adds modules that start as the identity (``GrowthBlock``,
+#: ``GlobalContext``), so a trained network of the smaller config carries over to the
+#: larger one unchanged (``checkpoint.init_network``) and training goes on from there.
+#: Unchanged in eval mode, exactly; in train mode the finest decoder level's batch norm
+#: takes its statistics over a crop widened by 2 px a side per decoder growth block.
+GROWTH_COUNTS = ("feat_extra_blocks", "dec_extra_blocks", "refine_extra_blocks")
+GROWTH_FLAGS = ("global_context",)
 
 
 @dataclass(frozen=True)
@@ -29,16 +36,19 @@ class ModelConfig:
     feat_res_blocks: int = 4  # residual blocks at 1/3 resolution
     spp_pool_sizes: tuple[int, ...] = (16, 8, 4, 2)  # average-pool windows [feature px]
     spp_channels: int = 16  # channels of each pyramid branch
+    feat_extra_blocks: int = 0  # identity-at-init residual blocks after those (growth, below)
     # SegNet2D (encoder-decoder with skip connections)
     enc_channels: tuple[int, ...] = (128, 256, 512, 1024, 1024)
     dec_channels: tuple[int, ...] = (1024, 512, 256, 128, 64)  # coarse to fine
     full_res_skip: bool = True  # last decoder block also sees the input volume
     pad_factor: float = 1.5  # features are zero-padded to this multiple of their size
     global_context: bool = False  # pooled bottleneck summary added back (not in the paper)
+    dec_extra_blocks: int = 0  # identity-at-init residual blocks per decoder level (growth)
     # SegRefineNet (guided by the reference image)
     guide_channels: int = 16
     refine_channels: int = 8
     refine_layers: int = 4
+    refine_extra_blocks: int = 0  # identity-at-init residual blocks before the last conv (growth)
     # ContRefineNet (StereoNet-style refinement of the AUC output)
     cont_channels: int = 32
     cont_dilations: tuple[int, ...] = (1, 2, 4, 8, 1, 1)
@@ -69,6 +79,9 @@ class ModelConfig:
                 f"ModelConfig: bad continuous volume eta [{self.cont_eta_min}, "
                 f"{self.cont_eta_max}] x {self.cont_levels} levels"
             )
+        for name in GROWTH_COUNTS:
+            if getattr(self, name) < 0:
+                raise ValueError(f"ModelConfig.{name}={getattr(self, name)}: must be >= 0")
         if self.pad_factor < 1.0:
             raise ValueError(f"ModelConfig.pad_factor={self.pad_factor}: must be >= 1")
 
@@ -95,6 +108,9 @@ class ModelConfig:
 #: ``cpu-small-gc``: ``cpu-small`` plus the global-context block at the SegNet bottleneck
 #: (an experiment: the static ground's tau = Z / v_ego hangs on one speed for the whole
 #: image; see the README for what it measured).
+#: ``cpu-medium``: ``cpu-small`` grown by identity-at-init residual blocks (three in the
+#: feature extractor, which runs once per frame, one per SegNet decoder level), trained
+#: from a ``cpu-small`` checkpoint (``bittc train --config cpu-medium --init``).
 #: ``tiny``: unit tests only.
 _CPU_SMALL = ModelConfig(
     stem_channels=16,
@@ -117,6 +133,7 @@ CONFIGS: dict[str, ModelConfig] = {
     "paper": ModelConfig(),
     "cpu-small": _CPU_SMALL,
     "cpu-small-gc": dataclasses.replace(_CPU_SMALL, global_context=True),
+    "cpu-medium": dataclasses.replace(_CPU_SMALL, feat_extra_blocks=3, dec_extra_blocks=1),
     "tiny": ModelConfig(
         stem_channels=8,
         feat_channels=8,

@@ -1,6 +1,7 @@
 """FeatExtractNet: PSMNet-style features at 1/3 of the input resolution.
 
-stem (3x3 conv, stride 3) -> 3x3 conv -> residual blocks -> spatial pyramid pooling
+stem (3x3 conv, stride 3) -> 3x3 conv -> residual blocks (then ``extra_blocks`` growth
+blocks, the identity at init) -> spatial pyramid pooling
 (average pools of several windows, 1x1 conv, bilinear upsampling) -> fusion conv.
 
 Convention: input (B, 3, H, W) in [0, 1] with H, W multiples of 3; the net normalises
@@ -15,7 +16,7 @@ import torch
 import torch.nn.functional as F
 from torch import nn
 
-from bittc_core.model.layers import LEAKY_SLOPE, ConvNormAct, conv, make_norm
+from bittc_core.model.layers import LEAKY_SLOPE, ConvNormAct, conv, growth_blocks, make_norm
 
 IMAGE_MEAN = 0.5
 IMAGE_STD = 0.5
@@ -39,7 +40,8 @@ class ResBlock(nn.Module):
 
 class FeatExtractNet(nn.Module):
     def __init__(self, *, stem_channels: int, out_channels: int, res_blocks: int,
-                 pool_sizes: tuple[int, ...], spp_channels: int, norm: str) -> None:
+                 pool_sizes: tuple[int, ...], spp_channels: int, norm: str,
+                 extra_blocks: int = 0) -> None:
         super().__init__()
         self.stem = nn.Sequential(
             # no padding: feature pixel i sees input pixels 3i..3i+2 exactly (centre 3i+1)
@@ -47,6 +49,7 @@ class FeatExtractNet(nn.Module):
             ConvNormAct(stem_channels, stem_channels, norm=norm),
         )
         self.blocks = nn.Sequential(*[ResBlock(stem_channels, norm) for _ in range(res_blocks)])
+        self.extra = growth_blocks(stem_channels, norm, extra_blocks)
         self.pool_sizes = pool_sizes
         self.branches = nn.ModuleList(
             [ConvNormAct(stem_channels, spp_channels, kernel=1, norm=norm) for _ in pool_sizes]
@@ -60,7 +63,7 @@ class FeatExtractNet(nn.Module):
     def forward(self, images: torch.Tensor) -> torch.Tensor:
         x = (images - IMAGE_MEAN) / IMAGE_STD
         low = self.stem(x)
-        high = self.blocks(low)
+        high = self.extra(self.blocks(low))
         size = high.shape[-2:]
         pyramid = [low, high]
         for window, branch in zip(self.pool_sizes, self.branches):

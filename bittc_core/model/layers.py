@@ -44,3 +44,29 @@ class NormAct(nn.Sequential):
 
     def __init__(self, channels: int, norm: str) -> None:
         super().__init__(make_norm(norm, channels), nn.LeakyReLU(LEAKY_SLOPE, inplace=True))
+
+
+class GrowthBlock(nn.Module):
+    """x + body(x), body = conv -> norm -> LeakyReLU -> conv -> norm, the identity at init.
+
+    Its last layer starts at zero (the norm's scale and shift, or the conv's weight and
+    bias when there is no norm), and nothing follows the sum, so a block added to a
+    trained network leaves that network's output unchanged until training moves it
+    (the ``*_extra_blocks`` fields of ``ModelConfig``)."""
+
+    def __init__(self, channels: int, norm: str) -> None:
+        super().__init__()
+        last_conv = conv(channels, channels, bias=norm == "none")
+        last_norm = make_norm(norm, channels)
+        self.body = nn.Sequential(ConvNormAct(channels, channels, norm=norm), last_conv, last_norm)
+        zero = last_conv if norm == "none" else last_norm
+        nn.init.zeros_(zero.weight)
+        nn.init.zeros_(zero.bias)
+
+    def forward(self, x):
+        return x + self.body(x)
+
+
+def growth_blocks(channels: int, norm: str, count: int) -> nn.Sequential:
+    """``count`` ``GrowthBlock`` in a row (an empty Sequential, the identity, for 0)."""
+    return nn.Sequential(*[GrowthBlock(channels, norm) for _ in range(count)])

@@ -65,15 +65,16 @@ class BinaryTTCNet(nn.Module):
         self.features = FeatExtractNet(
             stem_channels=c.stem_channels, out_channels=c.feat_channels,
             res_blocks=c.feat_res_blocks, pool_sizes=c.spp_pool_sizes,
-            spp_channels=c.spp_channels, norm=c.norm,
+            spp_channels=c.spp_channels, norm=c.norm, extra_blocks=c.feat_extra_blocks,
         )
         self.segnet = SegNet2D(
             feat_channels=c.feat_channels, enc_channels=c.enc_channels,
             dec_channels=c.dec_channels, full_res_skip=c.full_res_skip, norm=c.norm,
-            global_context=c.global_context,
+            global_context=c.global_context, extra_blocks=c.dec_extra_blocks,
         )
         self.refine = SegRefineNet(guide_channels=c.guide_channels,
-                                   channels=c.refine_channels, layers=c.refine_layers)
+                                   channels=c.refine_channels, layers=c.refine_layers,
+                                   extra_blocks=c.refine_extra_blocks)
         self.cont_refine = ContRefineNet(channels=c.cont_channels, dilations=c.cont_dilations,
                                          norm=c.norm, levels=c.cont_levels if c.cont_refine_levels else 0)
 

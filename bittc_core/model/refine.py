@@ -4,7 +4,8 @@ Guide features: three 3x3 convs on the (normalised) reference image, ReLU, ReLU,
 (paper Supp. A). They do not depend on the threshold, so ``guide`` runs once per frame
 and, with the first refine conv split as conv([logit, g]) = conv_l(logit) + conv_g(g),
 the guide part of that conv is also computed once. Per map: that sum, LeakyReLU, then
-``layers - 1`` 3x3 convs with LeakyReLU(0.1) and a last 3x3 conv. We add its output to
+``layers - 1`` 3x3 convs with LeakyReLU(0.1), ``extra_blocks`` growth blocks (the
+identity at init, not in the paper) and a last 3x3 conv. We add its output to
 the coarse logit (a residual, our choice) so an untrained refiner starts as identity-ish.
 """
 
@@ -14,12 +15,13 @@ import torch
 from torch import nn
 
 from bittc_core.model.extractor import IMAGE_MEAN, IMAGE_STD
-from bittc_core.model.layers import LEAKY_SLOPE, conv
+from bittc_core.model.layers import LEAKY_SLOPE, conv, growth_blocks
 from bittc_core.model.segnet import _broadcast_add
 
 
 class SegRefineNet(nn.Module):
-    def __init__(self, *, guide_channels: int, channels: int, layers: int) -> None:
+    def __init__(self, *, guide_channels: int, channels: int, layers: int,
+                 extra_blocks: int = 0) -> None:
         super().__init__()
         g = guide_channels
         self.guide_net = nn.Sequential(
@@ -31,7 +33,8 @@ class SegRefineNet(nn.Module):
         for _ in range(layers - 1):
             body += [conv(channels, channels), nn.LeakyReLU(LEAKY_SLOPE, inplace=True)]
         body.append(conv(channels, 1))
-        self.body = nn.Sequential(*body)
+        self.body = nn.Sequential(*body)  # indices kept as before growth, for checkpoints
+        self.extra = growth_blocks(channels, "none", extra_blocks)
 
     def guide(self, image_ref: torch.Tensor) -> torch.Tensor:
         """(B, 3, H, W) in [0, 1] -> guide part of the first refine conv (B, ch, H, W)."""
@@ -39,4 +42,8 @@ class SegRefineNet(nn.Module):
 
     def forward(self, guide_terms: torch.Tensor, logit: torch.Tensor) -> torch.Tensor:
         """logit (B*K, 1, H, W) -> refined logit (B*K, 1, H, W)."""
-        return logit + self.body(_broadcast_add(guide_terms, self.first_logit(logit)))
+        x = _broadcast_add(guide_terms, self.first_logit(logit))
+        *hidden, last = self.body
+        for layer in hidden:
+            x = layer(x)
+        return logit + last(self.extra(x))

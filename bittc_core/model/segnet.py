@@ -3,7 +3,8 @@
 Encoder: blocks of (3x3 conv stride 2, 3x3 conv), one /2 per block. Decoder: blocks of
 (4x4 deconv stride 2, 3x3 conv over [upsampled, skip]); the skip of the finest block
 is the input volume itself (``full_res_skip``). A final 3x3 conv gives three logits per
-pixel: binary TTC, binary flow u, binary flow v (paper Supp. A).
+pixel: binary TTC, binary flow u, binary flow v (paper Supp. A). ``extra_blocks`` growth
+blocks (identity at init, not in the paper) follow each decoder level's last conv.
 
 Split convolutions (field notes): a conv over a channel concatenation is the sum of
 convs over the parts, conv([a, b]) = conv_a(a) + conv_b(b). The reference part of the
@@ -28,7 +29,7 @@ import torch
 import torch.nn.functional as F
 from torch import nn
 
-from bittc_core.model.layers import LEAKY_SLOPE, ConvNormAct, NormAct, conv, make_norm
+from bittc_core.model.layers import LEAKY_SLOPE, ConvNormAct, NormAct, conv, growth_blocks, make_norm
 from bittc_core.model.warp import PaddedGrid
 
 NUM_HEADS = 3  # ttc, flow u, flow v
@@ -97,7 +98,7 @@ class GlobalContext(nn.Module):
 class SegNet2D(nn.Module):
     def __init__(self, *, feat_channels: int, enc_channels: tuple[int, ...],
                  dec_channels: tuple[int, ...], full_res_skip: bool, norm: str,
-                 global_context: bool = False) -> None:
+                 global_context: bool = False, extra_blocks: int = 0) -> None:
         super().__init__()
         e, d = enc_channels, dec_channels
         levels = len(e)
@@ -131,6 +132,7 @@ class SegNet2D(nn.Module):
             self.last_ref = conv(feat_channels, d[-1], bias=False)
             self.last_src = conv(feat_channels, d[-1], bias=False)
         self.last_post = NormAct(d[-1], norm)
+        self.dec_extra = nn.ModuleList(growth_blocks(ch, norm, extra_blocks) for ch in d)
         self.head = conv(d[-1], NUM_HEADS)
 
     def prepare(self, ref_padded: torch.Tensor) -> ReferenceTerms:
@@ -141,9 +143,9 @@ class SegNet2D(nn.Module):
     def forward(self, ref: ReferenceTerms, warped: torch.Tensor, grid: PaddedGrid) -> torch.Tensor:
         """warped (B*K, C, hp, wp) -> logits (B*K, 3, h, w), cropped to the unpadded map.
 
-        The last two 3x3 convs only run on the crop plus a 2-px margin: the result
-        inside is exactly that of running them on the whole padded map (the margin
-        covers their receptive field; beyond the padded map both see zeros)."""
+        The finest level's convs only run on the crop plus a margin of 1 px per 3x3 conv:
+        the result inside is exactly that of running them on the whole padded map (the
+        margin covers their receptive field; beyond the padded map both see zeros)."""
         x = self.first_post(_broadcast_add(ref.first, self.first_src(warped)))
         skips = [self.first_conv2(x)]
         for block in self.down:
@@ -154,9 +156,10 @@ class SegNet2D(nn.Module):
         for i, up in enumerate(self.up):
             x = up(x)
             if i < len(self.fuse):
-                x = self.fuse[i](torch.cat((x, skips.pop()), dim=1))
-        box = _MarginBox.around(grid, margin=2)
+                x = self.dec_extra[i](self.fuse[i](torch.cat((x, skips.pop()), dim=1)))
+        finest_extra = self.dec_extra[-1]
+        box = _MarginBox.around(grid, margin=2 + 2 * len(finest_extra))
         x = self.last_dec(box.cut(x))
         if self.full_res_skip:
             x = _broadcast_add(box.cut(ref.skip), x + self.last_src(box.cut(warped)))
-        return box.inner(self.head(self.last_post(x)))
+        return box.inner(self.head(finest_extra(self.last_post(x))))
