@@ -112,13 +112,13 @@ class MetricAccumulator:
     _actor: dict = field(default_factory=dict)
     _latency_ms: list = field(default_factory=list)
     _iou_by_threshold: list = field(default_factory=list)  # per image: MIOU_LEVELS ious (nan: skipped)
-    _by_share: dict = field(default_factory=dict)  # label -> [[two-class iou], [inside iou]]
+    _by_share: dict = field(default_factory=dict)  # label -> [[two-class iou], [inside iou], [false inside px]]
     _mid_parts: dict = field(default_factory=dict)  # "actor" / "static" -> [sum, count]
     _by_speed: dict = field(default_factory=dict)  # label -> [[image miou], [false inside, missed, static px]]
 
     def __post_init__(self) -> None:
         self.miou_thresholds_s = miou_thresholds_s(self.dt_s)
-        self._by_share = {label: [[], []] for label in INSIDE_SHARE_LABELS}
+        self._by_share = {label: [[], [], []] for label in INSIDE_SHARE_LABELS}
         self._mid_parts = {"actor": [0.0, 0], "static": [0.0, 0]}
         self._errors = {t: [0, 0] for t in ERROR_RATE_TAUS_S}
         self._actor = {t: np.zeros((2, 2), np.int64) for t in ACTOR_TAUS_S}
@@ -149,6 +149,7 @@ class MetricAccumulator:
                 group[0].append(ious[-1])
                 if counts[0, 1] > 0:
                     group[1].append(counts[0, 0] / counts[0, 1])
+                    group[2].append(int(np.sum(pred[i] & ~truth & valid)))
         self._iou_by_threshold.append(ious)
         actors = valid & (instance > 0)
         for j, t in enumerate(ERROR_RATE_TAUS_S):
@@ -198,8 +199,13 @@ class MetricAccumulator:
 
         per_threshold = np.array(self._iou_by_threshold, dtype=np.float64).reshape(-1, len(self.miou_thresholds_s))
         by_threshold = {threshold_key(t): mean(col[np.isfinite(col)]) for t, col in zip(self.miou_thresholds_s, per_threshold.T)}
+        # false inside px: pixels predicted inside that are outside, per pair with a non-empty
+        # inside union (in the "0" group: the stray pixels of an empty geofence)
         by_share = {label: {"pairs": len(g[0]), "miou": mean(g[0]), "inside_iou": mean(g[1]),
-                            "pairs_with_inside_union": len(g[1])} for label, g in self._by_share.items()}
+                            "pairs_with_inside_union": len(g[1]),
+                            "false_inside_px_median": float(np.median(g[2])) if g[2] else nan,
+                            "false_inside_px_p90": float(np.percentile(g[2], 90)) if g[2] else nan}
+                    for label, g in self._by_share.items()}
         mid = {f"mid_{part}": (s / c * MID_SCALE if c else nan) for part, (s, c) in self._mid_parts.items()}
         out = {"miou_by_threshold_s": by_threshold, "by_inside_share": by_share, **mid}
         if any(len(g[0]) or g[1][2] for g in self._by_speed.values()):

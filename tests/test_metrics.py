@@ -81,8 +81,10 @@ def test_breakdown_groups_pairs_by_inside_share():
     b = acc.result()["breakdown"]
     wrong = (0 + 99 / 100) / 2  # inside IoU 0, outside 99 / 100
     assert b["by_inside_share"]["0"] == {"pairs": n, "miou": pytest.approx((3 * 1.0 + (n - 3) * wrong) / n),
-                                         "inside_iou": 0.0, "pairs_with_inside_union": n - 3}
-    assert b["by_inside_share"]["0-5%"] == {"pairs": n, "miou": 1.0, "inside_iou": 1.0, "pairs_with_inside_union": n}
+                                         "inside_iou": 0.0, "pairs_with_inside_union": n - 3,
+                                         "false_inside_px_median": 1.0, "false_inside_px_p90": 1.0}
+    assert b["by_inside_share"]["0-5%"] == {"pairs": n, "miou": 1.0, "inside_iou": 1.0, "pairs_with_inside_union": n,
+                                            "false_inside_px_median": 0.0, "false_inside_px_p90": 0.0}
     assert b["by_inside_share"]["20-100%"]["pairs"] == 0 and math.isnan(b["by_inside_share"]["20-100%"]["miou"])
     by_t = list(b["miou_by_threshold_s"].values())
     assert by_t == pytest.approx([1.0] * 3 + [(wrong + 1.0) / 2] * (n - 3))

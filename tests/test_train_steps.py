@@ -10,14 +10,17 @@ from bittc_core.errors import CliError
 from bittc_core.train import TrainConfig
 from bittc_core.metrics import class_counts, two_class_iou
 from bittc_core.train.losses import lovasz_two_class, masked_bce
-from bittc_core.train.targets import eta_labels, shift_labels
+from bittc_core.train.targets import PIXEL_THRESHOLD_JITTER, eta_labels, sample_eta_at_pixels, shift_labels
+from bittc_core.ttc import tau_to_eta
 from tests.train_helpers import fit_fixed_batch, make_trainer
 
 
-@pytest.mark.parametrize("stage, actor_weight, lovasz_weight",
-                         [("flow", 1.0, 0.0), ("binary", 1.0, 0.0), ("binary", 3.0, 0.0), ("binary", 1.0, 0.5)])
-def test_a_few_steps_lower_the_loss(tmp_path, stage, actor_weight, lovasz_weight):
-    tr = make_trainer(tmp_path, stage, actor_weight=actor_weight, lovasz_weight=lovasz_weight)
+@pytest.mark.parametrize("stage, actor_weight, lovasz_weight, pixel_share",
+                         [("flow", 1.0, 0.0, 0.0), ("binary", 1.0, 0.0, 0.0), ("binary", 3.0, 0.0, 0.0),
+                          ("binary", 1.0, 0.5, 0.0), ("binary", 1.0, 0.0, 0.5)])
+def test_a_few_steps_lower_the_loss(tmp_path, stage, actor_weight, lovasz_weight, pixel_share):
+    tr = make_trainer(tmp_path, stage, actor_weight=actor_weight, lovasz_weight=lovasz_weight,
+                      pixel_threshold_share=pixel_share)
     losses = fit_fixed_batch(tr, next(iter(tr.loader)), 30)  # one fixed batch: the loss must go down on it
     assert sum(losses[-3:]) / 3 < 0.8 * sum(losses[:3]) / 3, losses
 
@@ -123,7 +126,8 @@ def test_labels():
 def args(**kw):
     base = dict(data="synthetic", config="tiny", out="m.pt", resume=False, init=None, seed=0, steps=10,
                 batch_size=2, lr=3e-4, warmup_steps=2, val_every=5, val_limit=4, device="cpu", stage="binary",
-                freeze_binary=False, actor_weight=1.0, lovasz_weight=0.0, teacher=None, distill_weight=None)
+                freeze_binary=False, actor_weight=1.0, lovasz_weight=0.0, teacher=None, distill_weight=None,
+                pixel_thresholds=0.0)
     base.update(kw)
     return argparse.Namespace(**base)
 
@@ -147,6 +151,8 @@ def args(**kw):
     (dict(teacher="missing.pt", stage="all"), "--teacher applies to --stage binary, not --stage 'all'"),
     (dict(lovasz_weight=float("inf")), "--lovasz-weight inf"),
     (dict(distill_weight=0.5), "--distill-weight needs --teacher"),
+    (dict(pixel_thresholds=1.5), "--pixel-thresholds 1.5"),
+    (dict(pixel_thresholds=float("nan")), "--pixel-thresholds nan"),
 ])
 def test_train_flags_are_validated(kw, match):
     with pytest.raises(CliError, match=match):
@@ -170,3 +176,19 @@ def test_config_yaml_records_each_stage_as_it_runs(tmp_path):
     assert saved["stages"] == ["continuous"]
     cfg = saved["train_config"]["continuous"]
     assert cfg["stage"] == "continuous" and cfg["freeze_binary"] is True and cfg["actor_weight"] == 2.0
+
+
+def test_pixel_thresholds_sit_at_pixel_eta_in_range():
+    gen = torch.Generator().manual_seed(0)
+    dt, lo = 0.1, tau_to_eta(0.2, 0.1)
+    eta = torch.full((3, 4, 5), 0.9)
+    eta[0, 0, 0] = 0.7  # pair 0: two values in range
+    eta[1] = 5.0  # pair 1: nothing in range -> uniform
+    mask = torch.ones(3, 4, 5, dtype=torch.bool)
+    mask[2] = False  # pair 2: nothing valid -> uniform
+    thr = sample_eta_at_pixels(eta, mask, 200, 0.2, 1.1, dt, gen)
+    assert thr.shape == (3, 200) and bool(((thr >= lo) & (thr <= 1.1)).all())
+    near = lambda t, v: (t - v).abs() <= PIXEL_THRESHOLD_JITTER + 1e-6  # noqa: E731
+    assert bool((near(thr[0], 0.9) | near(thr[0], 0.7)).all()) and near(thr[0], 0.7).any()
+    for uniform in thr[1], thr[2]:  # spread over the range, not at one value
+        assert uniform.min() < lo + 0.1 and uniform.max() > 1.0

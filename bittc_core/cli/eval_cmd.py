@@ -102,7 +102,8 @@ def format_table(r: dict) -> str:
         lines.append("mIoU pairs by share of pixels inside the geofence:")
         for label, g in b["by_inside_share"].items():
             lines.append(f"  {label:>8}: {g['pairs']:>6} pairs, mIoU {g['miou']:.3f}, inside-class IoU "
-                         f"{g['inside_iou']:.3f} over {g['pairs_with_inside_union']} pairs")
+                         f"{g['inside_iou']:.3f} over {g['pairs_with_inside_union']} pairs, "
+                         f"false inside px median {g['false_inside_px_median']:.0f}, p90 {g['false_inside_px_p90']:.0f}")
         if "by_ego_speed_mps" in b:
             key = f"{STATIC_ERROR_TAU_S:g}s"
             lines.append(f"images by ego speed [m/s]: mIoU, static pixels at tau = {STATIC_ERROR_TAU_S:g} s false inside / missed:")

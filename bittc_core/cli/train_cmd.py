@@ -44,6 +44,9 @@ def add_parser(sub) -> argparse.ArgumentParser:
     p.add_argument("--lovasz-weight", type=float, default=0.0,
                    help="binary stage: add this weight x a Lovasz surrogate of the per-map two-class IoU "
                         "to the BCE (default 0)")
+    p.add_argument("--pixel-thresholds", type=float, default=0.0, metavar="SHARE",
+                   help="binary stage: this share of the eta thresholds at the eta of a random valid pixel of "
+                        "each pair (jittered), the rest uniform (default 0)")
     p.add_argument("--teacher", default=None,
                    help="binary stage: also learn the flip-averaged maps of this frozen checkpoint (same config; "
                         "self-distillation, soft BCE targets beside the ground truth; each step also runs the teacher "
@@ -79,6 +82,8 @@ def _check(args) -> None:
         raise CliError(f"--actor-weight {args.actor_weight}: must be > 0 and finite")
     if not 0 <= args.lovasz_weight < math.inf:
         raise CliError(f"--lovasz-weight {args.lovasz_weight}: must be >= 0 and finite")
+    if not 0 <= args.pixel_thresholds <= 1:
+        raise CliError(f"--pixel-thresholds {args.pixel_thresholds}: must be in [0, 1]")
     if args.freeze_binary and args.stage not in ("continuous", "all"):
         raise CliError(f"--freeze-binary applies to the continuous stage, not --stage {args.stage!r}")
     if args.teacher is not None:
@@ -168,7 +173,7 @@ def run(args) -> int:
     base = TrainConfig(steps=args.steps, batch_size=args.batch_size, lr=args.lr, warmup_steps=args.warmup_steps,
                        val_every=args.val_every, val_limit=args.val_limit, seed=args.seed,
                        actor_weight=args.actor_weight, lovasz_weight=args.lovasz_weight,
-                       distill_weight=distill_weight)
+                       distill_weight=distill_weight, pixel_threshold_share=args.pixel_thresholds)
     stage_cfgs = {stage: dataclasses.replace(base, stage=stage,
                                              freeze_binary=args.freeze_binary and stage == "continuous")
                   for stage in stages}

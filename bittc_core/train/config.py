@@ -21,6 +21,9 @@ class TrainConfig:
     shifts_per_pair: int = 2  # (u, v) shift hypotheses per image pair
     train_tau_min_s: float = 0.2  # [s] thresholds: eta uniform in [eta(tau_min), eta_max]
     train_eta_max: float = 1.1  # > 1: receding thresholds too (their negatives matter)
+    # binary stage: this share of each pair's thresholds at the eta of a random valid pixel
+    # (jittered; ``train.targets.sample_eta_at_pixels``), the rest uniform
+    pixel_threshold_share: float = 0.0
     actor_weight: float = 1.0  # binary TTC loss weight of moving-actor pixels (instance > 0), static 1
     lovasz_weight: float = 0.0  # binary stage: + this x Lovasz two-class IoU surrogate per map
     # binary stage: + this x BCE towards a frozen teacher's flip-averaged maps (``train.distill``;
@@ -57,6 +60,8 @@ class TrainConfig:
             raise ValueError(f"distill_weight={self.distill_weight}: must be >= 0")
         if self.distill_weight > 0 and self.stage != "binary":
             raise ValueError(f"distill_weight applies to the binary stage, not {self.stage!r}")
+        if not 0.0 <= self.pixel_threshold_share <= 1.0:
+            raise ValueError(f"pixel_threshold_share={self.pixel_threshold_share}: must be in [0, 1]")
         if self.warmup_steps < 0:
             raise ValueError(f"warmup_steps={self.warmup_steps}: must be >= 0")
         if self.lr <= 0 or self.clip_grad_norm <= 0:

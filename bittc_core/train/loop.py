@@ -36,7 +36,8 @@ from bittc_core.model import BinaryTTCNet
 from bittc_core.train.config import TrainConfig
 from bittc_core.train.distill import flip_averaged_logits
 from bittc_core.train.losses import lovasz_two_class, masked_bce, masked_smooth_l1
-from bittc_core.train.targets import eta_labels, sample_eta, sample_shifts_px, shift_labels, valid_mask
+from bittc_core.train.targets import (eta_labels, sample_eta, sample_eta_at_pixels, sample_shifts_px, shift_labels,
+                                     valid_mask)
 from bittc_core.train.validate import validate
 
 # new columns go last, so a run resumed from an older log keeps its columns aligned
@@ -148,7 +149,12 @@ class Trainer:
         eta = batch["eta"]
         if c.stage == "binary":
             thr = sample_eta(b, c.thresholds_per_pair, c.train_tau_min_s, c.train_eta_max,
-                             mc.frame_dt_s, self.gen).to(self.device)
+                             mc.frame_dt_s, self.gen)
+            at_pixels = round(c.thresholds_per_pair * c.pixel_threshold_share)
+            if at_pixels:
+                thr[:, :at_pixels] = sample_eta_at_pixels(eta, mask, at_pixels, c.train_tau_min_s,
+                                                          c.train_eta_max, mc.frame_dt_s, self.gen)
+            thr = thr.to(self.device)
             logits = net.classify_eta(ctx, feats[:b], thr)
             weight = None
             if c.actor_weight != 1.0:

@@ -1,6 +1,9 @@
 """Hypotheses and their labels for one batch.
 
-TTC: eta thresholds uniform in [tau_to_eta(train_tau_min_s), train_eta_max]; label
+TTC: eta thresholds uniform in [tau_to_eta(train_tau_min_s), train_eta_max] or, for a
+share of them (``TrainConfig.pixel_threshold_share``), at the eta of a random valid pixel
+of the pair in that range plus a uniform jitter of +-``PIXEL_THRESHOLD_JITTER`` (the
+geofence's edge then runs through the image, where the eta has to be read precisely); label
 1[0 < eta <= eta_i] (inside the geofence; thresholds above 1 label every approaching
 and static pixel inside and only faster-receding ones outside).
 Flow: shifts that are multiples of 3 px (one feature pixel) uniform in
@@ -20,6 +23,26 @@ def sample_eta(b: int, k: int, tau_min_s: float, eta_max: float, dt_s: float,
                gen: torch.Generator) -> torch.Tensor:
     lo = tau_to_eta(tau_min_s, dt_s)
     return lo + (eta_max - lo) * torch.rand(b, k, generator=gen)
+
+
+PIXEL_THRESHOLD_JITTER = 0.02  # [eta] half-width of the jitter of pixel-drawn thresholds
+
+
+def sample_eta_at_pixels(eta: torch.Tensor, mask: torch.Tensor, k: int, tau_min_s: float,
+                         eta_max: float, dt_s: float, gen: torch.Generator) -> torch.Tensor:
+    """eta, mask (B, H, W) -> (B, k) thresholds at the eta of random valid pixels of each
+    pair in [tau_to_eta(tau_min_s), eta_max], jittered, clipped to that range; uniform
+    for a pair with no such pixel. On the CPU (``gen`` is a CPU generator)."""
+    lo = tau_to_eta(tau_min_s, dt_s)
+    eta, mask = eta.detach().cpu(), mask.cpu()
+    out = lo + (eta_max - lo) * torch.rand(eta.shape[0], k, generator=gen)
+    jitter = PIXEL_THRESHOLD_JITTER * (2 * torch.rand(eta.shape[0], k, generator=gen) - 1)
+    for i in range(eta.shape[0]):
+        values = eta[i][mask[i] & (eta[i] >= lo) & (eta[i] <= eta_max)]
+        if values.numel():
+            pick = torch.randint(values.numel(), (k,), generator=gen)
+            out[i] = (values[pick] + jitter[i]).clamp(lo, eta_max)
+    return out
 
 
 def sample_shifts_px(b: int, k: int, max_shift_px: float, gen: torch.Generator) -> torch.Tensor:
