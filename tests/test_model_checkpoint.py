@@ -65,17 +65,27 @@ def _frames():
     return torch.rand(1, 3, 96, 288, generator=g), torch.rand(1, 3, 96, 288, generator=g), torch.tensor([[0.8, 0.95]])
 
 
-def test_init_adds_the_global_context_block_as_the_identity(tmp_path):
+def _make_context_live(net):
+    net.segnet.context.expand.bias.fill_(0.5)
+
+
+def _make_decoder_block_live(net):
+    net.segnet.dec_extra[-1][0].body[2].weight.fill_(0.5)  # the finest level's last norm
+
+
+@pytest.mark.parametrize("grown, make_live", [("cpu-small-gc", _make_context_live),
+                                              ("cpu-medium", _make_decoder_block_live)])
+def test_init_grows_cpu_small_as_the_identity(tmp_path, grown, make_live):
     torch.manual_seed(0)
     plain = BinaryTTCNet(get_config("cpu-small")).eval()
     path = tmp_path / "plain.pt"
     save_checkpoint(path, make_payload(plain, "cpu-small", {}))
-    net = init_network(path, "cpu-small-gc").eval()
-    assert net.config == get_config("cpu-small-gc") and net.segnet.context is not None
+    net = init_network(path, grown).eval()
+    assert net.config == get_config(grown)
     with torch.no_grad():
-        torch.testing.assert_close(net(*_frames()), plain(*_frames()))
-        # the block is live: once its output conv is non-zero the logits change
-        net.segnet.context.expand.bias.fill_(0.5)
+        torch.testing.assert_close(net(*_frames()), plain(*_frames()), rtol=0, atol=0)
+        # the added modules are live: once their last layer is non-zero the logits change
+        make_live(net)
         assert not torch.allclose(net(*_frames()), plain(*_frames()))
 
 
@@ -97,21 +107,10 @@ def test_init_refuses_other_configs(tmp_path):
         init_network(path, "cpu-small-gc")
 
 
-def test_init_grows_cpu_small_into_cpu_medium_as_the_identity(tmp_path):
-    torch.manual_seed(0)
-    plain = BinaryTTCNet(get_config("cpu-small")).eval()
-    path = tmp_path / "plain.pt"
-    save_checkpoint(path, make_payload(plain, "cpu-small", {}))
-    net = init_network(path, "cpu-medium").eval()
-    assert net.config == get_config("cpu-medium") and len(net.features.extra) == 3
-    with torch.no_grad():
-        torch.testing.assert_close(net(*_frames()), plain(*_frames()), rtol=0, atol=0)
-        # the added blocks are live: a non-zero last norm changes the logits
-        net.segnet.dec_extra[-1][0].body[2].weight.fill_(0.5)
-        assert not torch.allclose(net(*_frames()), plain(*_frames()))
-    # never shrunk: cpu-medium does not go back to cpu-small, nor across to cpu-small-gc
-    save_checkpoint(path, make_payload(net, "cpu-medium", {}))
-    for other in ("cpu-small", "cpu-small-gc"):
+def test_init_never_shrinks(tmp_path):
+    path = tmp_path / "medium.pt"
+    save_checkpoint(path, make_payload(BinaryTTCNet(get_config("cpu-medium")), "cpu-medium", {}))
+    for other in ("cpu-small", "cpu-small-gc"):  # back, and across
         with pytest.raises(CheckpointError, match=f"neither '{other}' nor a config '{other}' grows from"):
             init_network(path, other)
 
