@@ -110,7 +110,8 @@ class ModelConfig:
 #: image; see the README for what it measured).
 #: ``cpu-medium``: ``cpu-small`` grown by identity-at-init residual blocks (three in the
 #: feature extractor, which runs once per frame, one per SegNet decoder level), trained
-#: from a ``cpu-small`` checkpoint (``bittc train --config cpu-medium --init``).
+#: from a ``cpu-small`` checkpoint (``bittc train --config cpu-medium --init``). An
+#: experiment (README): no gain in one run, and ~22 ms for one threshold, over budget.
 #: ``tiny``: unit tests only.
 _CPU_SMALL = ModelConfig(
     stem_channels=16,
