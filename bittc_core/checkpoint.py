@@ -145,10 +145,10 @@ def grows_into(source: ModelConfig, target: ModelConfig) -> bool:
     """True when ``target`` is ``source`` plus identity-at-init modules only."""
     if source == target:
         return False
-    grown = {n: getattr(target, n) for n in (*GROWTH_COUNTS, *GROWTH_FLAGS)}
-    if dataclasses.replace(source, **grown) != target:
+    fields = (*GROWTH_COUNTS, *GROWTH_FLAGS)
+    if dataclasses.replace(source, **{n: getattr(target, n) for n in fields}) != target:
         return False  # some other field differs
-    return all(getattr(source, n) <= getattr(target, n) for n in (*GROWTH_COUNTS, *GROWTH_FLAGS))
+    return all(getattr(source, n) <= getattr(target, n) for n in fields)
 
 
 def pick_device(name: str = "auto") -> torch.device:

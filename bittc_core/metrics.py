@@ -145,11 +145,12 @@ class MetricAccumulator:
             counts = class_counts(pred[i], truth, valid)
             ious.append(two_class_iou(counts))
             if np.isfinite(ious[-1]):
-                group = self._by_share[inside_share_group(int(np.sum(truth & valid)), valid_px)]
+                inside_px = int(np.sum(truth & valid))
+                group = self._by_share[inside_share_group(inside_px, valid_px)]
                 group[0].append(ious[-1])
                 if counts[0, 1] > 0:
                     group[1].append(counts[0, 0] / counts[0, 1])
-                    group[2].append(int(np.sum(pred[i] & ~truth & valid)))
+                    group[2].append(int(counts[0, 1]) - inside_px)  # union minus truth: false inside
         self._iou_by_threshold.append(ious)
         actors = valid & (instance > 0)
         for j, t in enumerate(ERROR_RATE_TAUS_S):

@@ -35,7 +35,7 @@ def sample_eta_at_pixels(eta: torch.Tensor, mask: torch.Tensor, k: int, tau_min_
     for a pair with no such pixel. On the CPU (``gen`` is a CPU generator)."""
     lo = tau_to_eta(tau_min_s, dt_s)
     eta, mask = eta.detach().cpu(), mask.cpu()
-    out = lo + (eta_max - lo) * torch.rand(eta.shape[0], k, generator=gen)
+    out = sample_eta(eta.shape[0], k, tau_min_s, eta_max, dt_s, gen)
     jitter = PIXEL_THRESHOLD_JITTER * (2 * torch.rand(eta.shape[0], k, generator=gen) - 1)
     for i in range(eta.shape[0]):
         values = eta[i][mask[i] & (eta[i] >= lo) & (eta[i] <= eta_max)]
