@@ -73,8 +73,13 @@ def _make_decoder_block_live(net):
     net.segnet.dec_extra[-1][0].body[2].weight.fill_(0.5)  # the finest level's last norm
 
 
+def _make_correlation_live(net):
+    net.segnet.corr_last.weight.fill_(0.5)
+
+
 @pytest.mark.parametrize("grown, make_live", [("cpu-small-gc", _make_context_live),
-                                              ("cpu-medium", _make_decoder_block_live)])
+                                              ("cpu-medium", _make_decoder_block_live),
+                                              ("cpu-small-corr", _make_correlation_live)])
 def test_init_grows_cpu_small_as_the_identity(tmp_path, grown, make_live):
     torch.manual_seed(0)
     plain = BinaryTTCNet(get_config("cpu-small")).eval()

@@ -112,16 +112,19 @@ def test_registered_config_sizes():
         small = count_parameters(BinaryTTCNet(CONFIGS["cpu-small"]))
         gc = count_parameters(BinaryTTCNet(CONFIGS["cpu-small-gc"]))
         medium = count_parameters(BinaryTTCNet(CONFIGS["cpu-medium"]))
+        corr = count_parameters(BinaryTTCNet(CONFIGS["cpu-small-corr"]))
         tiny = count_parameters(BinaryTTCNet(CONFIGS["tiny"]))
     assert 88e6 < paper < 94e6  # "about 91 M"
     assert tiny < small < gc < 2e6  # cpu-small-gc = cpu-small + the global-context block
     assert small < medium < 2e6  # cpu-medium = cpu-small + growth blocks
+    assert small < corr < small + 10_000  # cpu-small-corr = cpu-small + two small convs
     assert CONFIGS["paper"].norm == "none" and CONFIGS["cpu-small"].norm != "none"
 
 
-@pytest.mark.parametrize("field", ["feat_extra_blocks", "dec_extra_blocks", "refine_extra_blocks"])
+@pytest.mark.parametrize("field", ["feat_extra_blocks", "dec_extra_blocks", "refine_extra_blocks", "corr_groups"])
 def test_growth_blocks_start_as_the_identity(field):
-    """A config with added growth blocks, loaded with the smaller config's weights,
+    """A config with added growth blocks (or the correlation volume), loaded with the
+    smaller config's weights,
     computes the same geofences and continuous output. In train mode too, except for
     decoder blocks: the finest level then runs on a wider crop, so its batch norm
     takes its statistics over more pixels."""
@@ -129,7 +132,7 @@ def test_growth_blocks_start_as_the_identity(field):
     small = BinaryTTCNet(CONFIGS["tiny"])
     grown = BinaryTTCNet(dataclasses.replace(CONFIGS["tiny"], **{field: 2}))
     missing, unexpected = grown.load_state_dict(small.state_dict(), strict=False)
-    assert missing and not unexpected and all(".extra" in k or "dec_extra" in k for k in missing)
+    assert missing and not unexpected and all(".extra" in k or "dec_extra" in k or ".corr_" in k for k in missing)
     prev, latest = torch.rand(2, 3, 48, 96), torch.rand(2, 3, 48, 96)
     eta = torch.tensor([[0.8, 1.0], [0.9, 1.1]])
     for train in (False,) if field == "dec_extra_blocks" else (True, False):
@@ -150,3 +153,10 @@ def test_growth_blocks_start_as_the_identity(field):
 def test_growth_counts_must_not_be_negative():
     with pytest.raises(ValueError, match="dec_extra_blocks=-1"):
         dataclasses.replace(CONFIGS["tiny"], dec_extra_blocks=-1)
+
+
+def test_correlation_groups_must_divide_the_features():
+    with pytest.raises(ValueError, match="corr_groups=3: must divide feat_channels=8"):
+        dataclasses.replace(CONFIGS["tiny"], corr_groups=3)
+    with pytest.raises(ValueError, match="corr_log_step=0.0"):
+        dataclasses.replace(CONFIGS["tiny"], corr_groups=2, corr_log_step=0.0)

@@ -24,7 +24,7 @@ def add_parser(sub) -> argparse.ArgumentParser:
     p = sub.add_parser("train", help="train the Binary-TTC network",
                        description=__doc__.split("\n\n", 1)[1])
     p.add_argument("--data", required=True, help="dataset folder, or 'synthetic' for the built-in generator")
-    p.add_argument("--config", required=True, help="model config name (paper, cpu-small, cpu-small-gc, cpu-medium, tiny)")
+    p.add_argument("--config", required=True, help="model config name (paper, cpu-small, cpu-small-gc, cpu-medium, cpu-small-corr, tiny)")
     p.add_argument("--out", required=True, help="best checkpoint path, *.pt")
     p.add_argument("--resume", action="store_true", help="continue from <stem>.last.pt")
     p.add_argument("--init", default=None, help="start from the weights of this checkpoint (same config, or a config "

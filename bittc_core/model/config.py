@@ -24,7 +24,7 @@ NORMS = ("none", "batch", "group")
 #: larger one unchanged (``checkpoint.init_network``) and training goes on from there.
 #: Unchanged in eval mode, exactly; in train mode the finest decoder level's batch norm
 #: takes its statistics over a crop widened by 2 px a side per decoder growth block.
-GROWTH_COUNTS = ("feat_extra_blocks", "dec_extra_blocks", "refine_extra_blocks")
+GROWTH_COUNTS = ("feat_extra_blocks", "dec_extra_blocks", "refine_extra_blocks", "corr_groups")
 GROWTH_FLAGS = ("global_context",)
 
 
@@ -44,6 +44,10 @@ class ModelConfig:
     pad_factor: float = 1.5  # features are zero-padded to this multiple of their size
     global_context: bool = False  # pooled bottleneck summary added back (not in the paper)
     dec_extra_blocks: int = 0  # identity-at-init residual blocks per decoder level (growth)
+    # group-wise correlation of f_ref with the source warped at eta_i and eta_i * exp(+-step)
+    # (not in the paper, ``model.correlation``): 0 = off; its convs start at zero (growth)
+    corr_groups: int = 0  # channel groups (divides feat_channels)
+    corr_log_step: float = 0.03  # [log eta] offset of the two outer warps
     # SegRefineNet (guided by the reference image)
     guide_channels: int = 16
     refine_channels: int = 8
@@ -82,6 +86,11 @@ class ModelConfig:
         for name in GROWTH_COUNTS:
             if getattr(self, name) < 0:
                 raise ValueError(f"ModelConfig.{name}={getattr(self, name)}: must be >= 0")
+        if self.corr_groups and self.feat_channels % self.corr_groups:
+            raise ValueError(f"ModelConfig.corr_groups={self.corr_groups}: must divide "
+                             f"feat_channels={self.feat_channels}")
+        if self.corr_log_step <= 0.0:
+            raise ValueError(f"ModelConfig.corr_log_step={self.corr_log_step}: must be > 0")
         if self.pad_factor < 1.0:
             raise ValueError(f"ModelConfig.pad_factor={self.pad_factor}: must be >= 1")
 
@@ -112,6 +121,9 @@ class ModelConfig:
 #: feature extractor, which runs once per frame, one per SegNet decoder level), trained
 #: from a ``cpu-small`` checkpoint (``bittc train --config cpu-medium --init``). An
 #: experiment (README): no gain in one run, and ~22 ms for one threshold, over budget.
+#: ``cpu-small-corr``: ``cpu-small`` plus the group-wise correlation volume (8 groups of 2
+#: channels, three warps per threshold) fed to SegNet's first and last convs, both
+#: starting at zero, trained from a ``cpu-small`` checkpoint (README: what it measured).
 #: ``tiny``: unit tests only.
 _CPU_SMALL = ModelConfig(
     stem_channels=16,
@@ -135,6 +147,7 @@ CONFIGS: dict[str, ModelConfig] = {
     "cpu-small": _CPU_SMALL,
     "cpu-small-gc": dataclasses.replace(_CPU_SMALL, global_context=True),
     "cpu-medium": dataclasses.replace(_CPU_SMALL, feat_extra_blocks=3, dec_extra_blocks=1),
+    "cpu-small-corr": dataclasses.replace(_CPU_SMALL, corr_groups=8),
     "tiny": ModelConfig(
         stem_channels=8,
         feat_channels=8,

@@ -27,6 +27,7 @@ from torch import nn
 from bittc_core.model.auc import auc_eta, uniform_levels
 from bittc_core.model.config import ModelConfig
 from bittc_core.model.cont_refine import ContRefineNet
+from bittc_core.model.correlation import CORR_OFFSETS, scale_correlation
 from bittc_core.model.extractor import FeatExtractNet
 from bittc_core.model.refine import SegRefineNet
 from bittc_core.model.segnet import HEAD_TTC, HEAD_U, HEAD_V, ReferenceTerms, SegNet2D
@@ -71,6 +72,7 @@ class BinaryTTCNet(nn.Module):
             feat_channels=c.feat_channels, enc_channels=c.enc_channels,
             dec_channels=c.dec_channels, full_res_skip=c.full_res_skip, norm=c.norm,
             global_context=c.global_context, extra_blocks=c.dec_extra_blocks,
+            corr_channels=len(CORR_OFFSETS) * c.corr_groups,
         )
         self.refine = SegRefineNet(guide_channels=c.guide_channels,
                                    channels=c.refine_channels, layers=c.refine_layers,
@@ -89,14 +91,15 @@ class BinaryTTCNet(nn.Module):
     def prepare_reference(self, feat_ref: torch.Tensor, image_ref: torch.Tensor) -> ReferenceContext:
         h, w = feat_ref.shape[-2:]
         grid = PaddedGrid.for_features(h, w, self.config.pad_factor, self.config.down_factor)
-        terms = self.segnet.prepare(grid.pad(feat_ref))
+        terms = self.segnet.prepare(grid.pad(feat_ref), grid)
         return ReferenceContext(image=image_ref, grid=grid, terms=terms,
                                 guide=self.refine.guide(image_ref))
 
     # -- per hypothesis ---------------------------------------------------------------
-    def _coarse(self, ctx: ReferenceContext, warped: torch.Tensor, heads: slice) -> torch.Tensor:
+    def _coarse(self, ctx: ReferenceContext, warped: torch.Tensor, heads: slice,
+                corr: torch.Tensor | None = None) -> torch.Tensor:
         """(B*K, C, hp, wp) -> logits of ``heads`` (B*K, n, H, W) at input resolution."""
-        logits = self.segnet(ctx.terms, warped, ctx.grid)[:, heads]
+        logits = self.segnet(ctx.terms, warped, ctx.grid, corr)[:, heads]
         return F.interpolate(logits, size=ctx.image.shape[-2:], mode="bilinear", align_corners=False)
 
     def classify_eta(self, ctx: ReferenceContext, feat_src: torch.Tensor,
@@ -113,7 +116,12 @@ class BinaryTTCNet(nn.Module):
         refined = []
         for start in range(0, k, chunk):
             part = eta[:, start:start + chunk]
-            coarse = self._coarse(ctx, scale_warp(feat_src, part, ctx.grid), slice(HEAD_TTC, HEAD_TTC + 1))
+            warped = scale_warp(feat_src, part, ctx.grid)
+            corr = None
+            if self.config.corr_groups:
+                corr = scale_correlation(ctx.terms.feat, feat_src, part, warped, ctx.grid,
+                                         self.config.corr_groups, self.config.corr_log_step)
+            coarse = self._coarse(ctx, warped, slice(HEAD_TTC, HEAD_TTC + 1), corr)
             coarse = coarse.view(b, part.shape[1], *coarse.shape[-2:])
             # the full-resolution refiner runs one threshold at a time: on a CPU a batch of
             # full-size maps falls out of cache and costs ~2x more per map (96x288, 2 cores)

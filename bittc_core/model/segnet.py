@@ -42,6 +42,7 @@ class ReferenceTerms:
 
     first: torch.Tensor
     skip: torch.Tensor | None
+    feat: torch.Tensor | None  # the unpadded reference features, kept for the correlation
 
 
 @dataclass(frozen=True)
@@ -98,7 +99,8 @@ class GlobalContext(nn.Module):
 class SegNet2D(nn.Module):
     def __init__(self, *, feat_channels: int, enc_channels: tuple[int, ...],
                  dec_channels: tuple[int, ...], full_res_skip: bool, norm: str,
-                 global_context: bool = False, extra_blocks: int = 0) -> None:
+                 global_context: bool = False, extra_blocks: int = 0,
+                 corr_channels: int = 0) -> None:
         super().__init__()
         e, d = enc_channels, dec_channels
         levels = len(e)
@@ -134,19 +136,35 @@ class SegNet2D(nn.Module):
         self.last_post = NormAct(d[-1], norm)
         self.dec_extra = nn.ModuleList(growth_blocks(ch, norm, extra_blocks) for ch in d)
         self.head = conv(d[-1], NUM_HEADS)
+        # correlation volume (``model.correlation``): a 3x3 stride-2 conv of it added to
+        # the first encoder conv, a 1x1 conv to the finest decoder conv; both zero at init,
+        # so a trained network is unchanged
+        self.corr_first = self.corr_last = None
+        if corr_channels:
+            self.corr_first = conv(corr_channels, e[0], stride=2, bias=False)
+            self.corr_last = conv(corr_channels, d[-1], kernel=1, bias=False)
+            for layer in (self.corr_first, self.corr_last):
+                nn.init.zeros_(layer.weight)
 
-    def prepare(self, ref_padded: torch.Tensor) -> ReferenceTerms:
+    def prepare(self, ref_padded: torch.Tensor, grid: PaddedGrid) -> ReferenceTerms:
         """Once per reference frame: the reference parts of the split convs."""
         skip = self.last_ref(ref_padded) if self.full_res_skip else None
-        return ReferenceTerms(first=self.first_ref(ref_padded), skip=skip)
+        feat = grid.crop(ref_padded) if self.corr_first is not None else None
+        return ReferenceTerms(first=self.first_ref(ref_padded), skip=skip, feat=feat)
 
-    def forward(self, ref: ReferenceTerms, warped: torch.Tensor, grid: PaddedGrid) -> torch.Tensor:
+    def forward(self, ref: ReferenceTerms, warped: torch.Tensor, grid: PaddedGrid,
+                corr: torch.Tensor | None = None) -> torch.Tensor:
         """warped (B*K, C, hp, wp) -> logits (B*K, 3, h, w), cropped to the unpadded map.
+        ``corr`` (B*K, 3G, hp, wp): the correlation volume, when the config has one and
+        the hypothesis is a scale (the binary-flow heads run without it).
 
         The finest level's convs only run on the crop plus a margin of 1 px per 3x3 conv:
         the result inside is exactly that of running them on the whole padded map (the
         margin covers their receptive field; beyond the padded map both see zeros)."""
-        x = self.first_post(_broadcast_add(ref.first, self.first_src(warped)))
+        first = self.first_src(warped)
+        if corr is not None:
+            first = first + self.corr_first(corr)
+        x = self.first_post(_broadcast_add(ref.first, first))
         skips = [self.first_conv2(x)]
         for block in self.down:
             skips.append(block(skips[-1]))
@@ -160,6 +178,8 @@ class SegNet2D(nn.Module):
         finest_extra = self.dec_extra[-1]
         box = _MarginBox.around(grid, margin=2 + 2 * len(finest_extra))
         x = self.last_dec(box.cut(x))
+        if corr is not None:
+            x = x + self.corr_last(box.cut(corr))
         if self.full_res_skip:
             x = _broadcast_add(box.cut(ref.skip), x + self.last_src(box.cut(warped)))
         return box.inner(self.head(finest_extra(self.last_post(x))))

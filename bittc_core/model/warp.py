@@ -66,10 +66,14 @@ def _repeat_per_hypothesis(src: torch.Tensor, k: int) -> torch.Tensor:
     return src[:, None].expand(b, k, c, h, w).reshape(b * k, c, h, w)
 
 
-def scale_warp(src: torch.Tensor, eta: torch.Tensor, grid: PaddedGrid) -> torch.Tensor:
-    """Scale ``src`` (B, C, h, w) about its centre for each eta (B, K) -> (B*K, C, hp, wp)."""
+def scale_warp(src: torch.Tensor, eta: torch.Tensor, grid: PaddedGrid,
+               unpadded: bool = False) -> torch.Tensor:
+    """Scale ``src`` (B, C, h, w) about its centre for each eta (B, K) -> (B*K, C, hp, wp),
+    or only the unpadded part of that, (B*K, C, h, w), with ``unpadded``."""
     b, k = eta.shape
     base = grid.base_grid(src.device, src.dtype)  # (hp, wp, 2)
+    if unpadded:
+        base = base[grid.top:grid.top + grid.h, grid.left:grid.left + grid.w]
     # normalised coords are centred on c, so c + eta (x - c) -> eta * n(x)
     sample = eta.reshape(b * k, 1, 1, 1).to(src.dtype) * base
     return F.grid_sample(_repeat_per_hypothesis(src, k), sample, mode="bilinear",
