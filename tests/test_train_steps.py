@@ -127,7 +127,7 @@ def args(**kw):
     base = dict(data="synthetic", config="tiny", out="m.pt", resume=False, init=None, seed=0, steps=10,
                 batch_size=2, lr=3e-4, warmup_steps=2, val_every=5, val_limit=4, device="cpu", stage="binary",
                 freeze_binary=False, actor_weight=1.0, lovasz_weight=0.0, teacher=None, distill_weight=None,
-                pixel_thresholds=0.0)
+                pixel_thresholds=0.0, lr_mult=[])
     base.update(kw)
     return argparse.Namespace(**base)
 
@@ -153,6 +153,12 @@ def args(**kw):
     (dict(distill_weight=0.5), "--distill-weight needs --teacher"),
     (dict(pixel_thresholds=1.5), "--pixel-thresholds 1.5"),
     (dict(pixel_thresholds=float("nan")), "--pixel-thresholds nan"),
+    (dict(lr_mult=["segnet.corr_"]), "--lr-mult 'segnet.corr_': expected PREFIX=M"),
+    (dict(lr_mult=["=3"]), "--lr-mult '=3'"),
+    (dict(lr_mult=["segnet.=0"]), "--lr-mult 'segnet.=0'"),
+    (dict(lr_mult=["segnet.=x"]), "--lr-mult 'segnet.=x'"),
+    (dict(lr_mult=["segnet.=inf"]), "--lr-mult 'segnet.=inf'"),
+    (dict(lr_mult=["segnet.=2", "segnet.=3"]), "prefix 'segnet.' given twice"),
 ])
 def test_train_flags_are_validated(kw, match):
     with pytest.raises(CliError, match=match):

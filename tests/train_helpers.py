@@ -27,7 +27,7 @@ def fit_fixed_batch(tr: Trainer, batch: dict, steps: int) -> list[float]:
     losses = []
     for step in range(steps):
         for g in tr.opt.param_groups:
-            g["lr"] = tr.lr_at(step)
+            g["lr"] = tr.lr_at(step) * g["lr_mult"]
         tr.gen.manual_seed(0)  # same hypotheses each step
         loss = tr.losses(batch)["loss"]
         tr.opt.zero_grad()

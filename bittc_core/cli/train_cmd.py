@@ -53,6 +53,9 @@ def add_parser(sub) -> argparse.ArgumentParser:
                         "on both views of its pairs)")
     p.add_argument("--distill-weight", type=float, default=None,
                    help="with --teacher: weight of the distillation BCE beside the ground-truth BCE (default 1)")
+    p.add_argument("--lr-mult", action="append", default=[], metavar="PREFIX=M",
+                   help="parameters whose names start with PREFIX learn at M x the learning rate (repeatable; "
+                        "e.g. segnet.corr_=10 for the correlation convs that --init added at zero)")
     p.add_argument("--freeze-binary", action="store_true",
                    help="continuous stage: train the continuous refinement only, the binary network frozen")
     return p
@@ -96,10 +99,37 @@ def _check(args) -> None:
             raise CliError("--distill-weight needs --teacher")
         if not 0 < args.distill_weight < math.inf:
             raise CliError(f"--distill-weight {args.distill_weight}: must be > 0 and finite")
+    parse_lr_mults(args.lr_mult)
     if args.resume and args.init:
         raise CliError("--resume and --init exclude each other")
     if args.init and not Path(args.init).is_file():
         raise CliError(f"--init {args.init!r}: no such file")
+
+
+def parse_lr_mults(values: list[str]) -> tuple[tuple[str, float], ...]:
+    """['segnet.corr_=10', ...] -> (('segnet.corr_', 10.0), ...); bad ones name the flag."""
+    out = []
+    for value in values:
+        prefix, sep, mult = value.partition("=")
+        try:
+            m = float(mult)
+        except ValueError:
+            m = math.nan
+        if not sep or not prefix or not 0 < m < math.inf:
+            raise CliError(f"--lr-mult {value!r}: expected PREFIX=M with a parameter-name prefix and M > 0, finite")
+        if prefix in dict(out):
+            raise CliError(f"--lr-mult {value!r}: prefix {prefix!r} given twice")
+        out.append((prefix, m))
+    return tuple(out)
+
+
+def _check_same_lr_mults(name: str, meta: dict, lr_mults: tuple[tuple[str, float], ...]) -> None:
+    """A resumed run keeps its learning-rate multipliers (its optimizer's groups)."""
+    old = tuple((str(p), float(m)) for p, m in meta.get("train_config", {}).get("lr_mults", ()))
+    if old != lr_mults:
+        def show(mults):
+            return " ".join(f"--lr-mult {p}={m:g}" for p, m in mults) or "no --lr-mult"
+        raise CliError(f"--resume: {name} was trained with {show(old)}, not {show(lr_mults)}")
 
 
 def _check_same_teacher(name: str, meta: dict, teacher: str | None, distill_weight: float) -> None:
@@ -127,6 +157,7 @@ def run(args) -> int:
     from bittc_core.model import BinaryTTCNet, get_config
     from bittc_core.train import STAGES, RunPaths, TrainConfig, Trainer
     from bittc_core.train.data import open_split
+    from bittc_core.train.loop import param_groups
 
     paths = RunPaths.from_out(args.out)
     try:
@@ -146,6 +177,11 @@ def run(args) -> int:
         net = init_network(args.init, args.config)
     else:
         net = BinaryTTCNet(get_config(args.config))
+    lr_mults = parse_lr_mults(args.lr_mult)
+    try:
+        param_groups(net, lr_mults)
+    except ValueError as err:
+        raise CliError(f"--lr-mult: {err} (config {args.config!r})") from None
     teacher, distill_weight = None, 0.0
     if args.teacher:
         distill_weight = args.distill_weight or 1.0
@@ -166,6 +202,7 @@ def run(args) -> int:
         state, meta_last = last.get("train_state", {}), last.get("train_meta", {})
         resume_stage = state.get("stage")
         _check_same_teacher(paths.last.name, meta_last, args.teacher, distill_weight)
+        _check_same_lr_mults(paths.last.name, meta_last, lr_mults)
         if resume_stage not in stages:
             raise CliError(f"--resume: {paths.last.name} is at stage {resume_stage!r}, not in {stages}")
         stages = stages[stages.index(resume_stage):]
@@ -173,7 +210,8 @@ def run(args) -> int:
     base = TrainConfig(steps=args.steps, batch_size=args.batch_size, lr=args.lr, warmup_steps=args.warmup_steps,
                        val_every=args.val_every, val_limit=args.val_limit, seed=args.seed,
                        actor_weight=args.actor_weight, lovasz_weight=args.lovasz_weight,
-                       distill_weight=distill_weight, pixel_threshold_share=args.pixel_thresholds)
+                       distill_weight=distill_weight, pixel_threshold_share=args.pixel_thresholds,
+                       lr_mults=lr_mults)
     stage_cfgs = {stage: dataclasses.replace(base, stage=stage,
                                              freeze_binary=args.freeze_binary and stage == "continuous")
                   for stage in stages}

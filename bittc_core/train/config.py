@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 STAGES = ("flow", "binary", "continuous")
@@ -37,6 +38,10 @@ class TrainConfig:
     # SegRefineNet) is frozen with its batch-norm statistics, so the geofences keep the
     # binary stage's accuracy (a small model fine-tuned end to end trades them for MiD)
     freeze_binary: bool = False
+    # (parameter-name prefix, multiplier) pairs: those parameters learn at lr x multiplier
+    # (``train.loop.param_groups``), e.g. modules added by growth, which start at zero and
+    # would otherwise stay small beside weights trained for thousands of steps
+    lr_mults: tuple[tuple[str, float], ...] = ()
     val_every: int = 250  # steps between validations (and checkpoints)
     val_limit: int = 64  # validation pairs
     log_every: int = 10  # steps between CSV rows
@@ -64,5 +69,10 @@ class TrainConfig:
             raise ValueError(f"pixel_threshold_share={self.pixel_threshold_share}: must be in [0, 1]")
         if self.warmup_steps < 0:
             raise ValueError(f"warmup_steps={self.warmup_steps}: must be >= 0")
+        for prefix, mult in self.lr_mults:
+            if not prefix or not 0 < mult < math.inf:
+                raise ValueError(f"lr_mults ({prefix!r}, {mult}): needs a prefix and a multiplier > 0, finite")
+        if len({prefix for prefix, _ in self.lr_mults}) != len(self.lr_mults):
+            raise ValueError(f"lr_mults {self.lr_mults}: a prefix is named twice")
         if self.lr <= 0 or self.clip_grad_norm <= 0:
             raise ValueError("lr and clip_grad_norm must be > 0")

@@ -72,6 +72,26 @@ def _forever(loader: DataLoader, epoch: int = 0):
         epoch += 1
 
 
+
+def param_groups(net: torch.nn.Module, lr_mults: tuple[tuple[str, float], ...]) -> list[dict]:
+    """The trainable parameters as AdamW groups, each with its ``lr_mult``: a parameter
+    whose name starts with a prefix of ``lr_mults`` learns at that multiple of the
+    scheduled rate (the longest matching prefix wins), every other one at 1x. A prefix
+    that names no trainable parameter is an error (a typo would silently do nothing)."""
+    groups: dict[float, list[torch.nn.Parameter]] = {}
+    used = set()
+    for name, q in net.named_parameters():
+        if not q.requires_grad:
+            continue
+        match = max((p for p, _ in lr_mults if name.startswith(p)), key=len, default=None)
+        used.add(match)
+        groups.setdefault(dict(lr_mults)[match] if match else 1.0, []).append(q)
+    unused = [p for p, _ in lr_mults if p not in used]
+    if unused:
+        raise ValueError(f"lr_mults: no trainable parameter name starts with {unused}")
+    return [{"params": params, "lr_mult": mult} for mult, params in groups.items()]
+
+
 class Trainer:
     def __init__(self, net: BinaryTTCNet, config_name: str, cfg: TrainConfig,
                  train_set: Dataset, val_set: Dataset, device: torch.device, paths: RunPaths,
@@ -98,7 +118,7 @@ class Trainer:
                                  generator=self.loader_gen)
         for module in self.frozen_modules():
             module.requires_grad_(False)
-        self.opt = torch.optim.AdamW([q for q in net.parameters() if q.requires_grad], lr=cfg.lr,
+        self.opt = torch.optim.AdamW(param_groups(net, cfg.lr_mults), lr=cfg.lr,
                                      weight_decay=cfg.weight_decay)
         self.step = 0
         self.best = -math.inf
@@ -253,11 +273,12 @@ class Trainer:
             batch = {k: v.to(self.device, non_blocking=True) for k, v in next(batches).items()}
             lr = self.lr_at(self.step)
             for group in self.opt.param_groups:
-                group["lr"] = lr
+                group["lr"] = lr * group["lr_mult"]
             parts = self.losses(batch)
             self.opt.zero_grad(set_to_none=True)
             parts["loss"].backward()
-            grad_norm = float(torch.nn.utils.clip_grad_norm_(self.opt.param_groups[0]["params"], c.clip_grad_norm))
+            grad_norm = float(torch.nn.utils.clip_grad_norm_(
+                [q for group in self.opt.param_groups for q in group["params"]], c.clip_grad_norm))
             self.opt.step()
             self.step += 1
             bar.update(1)

@@ -1,0 +1,78 @@
+"""Per-module learning-rate multipliers (``bittc train --lr-mult PREFIX=M``)."""
+
+import argparse
+
+import pytest
+import torch
+
+from bittc_core.cli import train_cmd
+from bittc_core.errors import CliError
+from bittc_core.model import BinaryTTCNet, get_config
+from bittc_core.train import TrainConfig
+from bittc_core.train.loop import param_groups
+from tests.train_helpers import fit_fixed_batch, make_trainer
+
+
+def _group_of(groups, param):
+    return next(g["lr_mult"] for g in groups if any(q is param for q in g["params"]))
+
+
+def test_groups_cover_every_trainable_parameter_once_and_the_longest_prefix_wins():
+    net = BinaryTTCNet(get_config("tiny"))
+    net.features.requires_grad_(False)
+    groups = param_groups(net, (("segnet.", 2.0), ("segnet.head", 5.0)))
+    listed = [q for g in groups for q in g["params"]]
+    trainable = [q for q in net.parameters() if q.requires_grad]
+    assert len(listed) == len(trainable) and {id(q) for q in listed} == {id(q) for q in trainable}
+    assert _group_of(groups, net.segnet.head.weight) == 5.0
+    assert _group_of(groups, net.segnet.first_src.weight) == 2.0
+    assert _group_of(groups, next(net.refine.parameters())) == 1.0
+    with pytest.raises(ValueError, match=r"no trainable parameter name starts with \['features.'\]"):
+        param_groups(net, (("features.", 3.0),))  # frozen: nothing to multiply
+    with pytest.raises(ValueError, match="a prefix is named twice"):
+        TrainConfig(lr_mults=(("segnet.", 2.0), ("segnet.", 3.0)))
+    with pytest.raises(ValueError, match=r"lr_mults \('segnet.', 0.0\)"):
+        TrainConfig(lr_mults=(("segnet.", 0.0),))
+
+
+def test_a_multiplied_module_takes_that_multiple_of_the_step(tmp_path):
+    """Adam's first step moves each weight by about lr (the sign of its gradient): with a
+    multiplier of 10 the named module moves ten times as far, the others as before."""
+    batch = next(iter(make_trainer(tmp_path / "a").loader))
+    moved = {}
+    for name, mults in (("plain", ()), ("x10", (("segnet.head", 10.0),))):
+        tr = make_trainer(tmp_path / name, net_seed=0, lr_mults=mults)
+        before = {k: v.detach().clone() for k, v in tr.net.named_parameters()}
+        fit_fixed_batch(tr, batch, steps=1)
+        moved[name] = {k: (v.detach() - before[k]).abs().max().item() for k, v in tr.net.named_parameters()}
+    head, other = "segnet.head.weight", "segnet.first_src.weight"
+    assert 9.0 < moved["x10"][head] / moved["plain"][head] < 11.0
+    assert moved["x10"][other] == pytest.approx(moved["plain"][other], rel=1e-3)
+
+
+def _cli(tmp_path, *extra):
+    parser = argparse.ArgumentParser()
+    train_cmd.add_parser(parser.add_subparsers())
+    return parser.parse_args(["train", "--data", "synthetic", "--config", "tiny", "--out", str(tmp_path / "m.pt"),
+                              "--steps", "2", "--val-every", "2", "--val-limit", "2", "--batch-size", "2",
+                              "--device", "cpu", *extra])
+
+
+def test_cli_refuses_a_prefix_that_names_nothing_and_writes_nothing(tmp_path):
+    with pytest.raises(CliError, match=r"--lr-mult: .*starts with \['segnet.corr_'\] \(config 'tiny'\)"):
+        train_cmd.run(_cli(tmp_path, "--lr-mult", "segnet.corr_=10"))
+    assert not list(tmp_path.glob("m*"))
+
+
+def test_run_records_the_multipliers_and_resume_keeps_them(tmp_path):
+    import yaml
+
+    assert train_cmd.run(_cli(tmp_path, "--lr-mult", "segnet.head=4")) == 0
+    saved = yaml.safe_load((tmp_path / "m.config.yaml").read_text())
+    assert saved["train_config"]["binary"]["lr_mults"] == [["segnet.head", 4.0]]
+    for extra, match in ((["--resume"], "with --lr-mult segnet.head=4, not no --lr-mult"),
+                         (["--resume", "--lr-mult", "segnet.head=2"], "not --lr-mult segnet.head=2")):
+        with pytest.raises(CliError, match=match):
+            train_cmd.run(_cli(tmp_path, *extra))
+    assert train_cmd.run(_cli(tmp_path, "--resume", "--lr-mult", "segnet.head=4", "--steps", "3")) == 0
+
