@@ -1,6 +1,5 @@
 """Self-distillation from a frozen teacher's flip-averaged maps, and the flip views."""
 
-import argparse
 import dataclasses
 
 import pytest
@@ -16,7 +15,7 @@ from bittc_core.train.distill import flip_averaged_logits
 from bittc_core.train.losses import masked_bce
 from bittc_core.train.targets import sample_eta, sample_shifts_px, valid_mask
 from tests import train_helpers
-from tests.train_helpers import fit_fixed_batch
+from tests.train_helpers import cli_args, fit_fixed_batch
 
 
 def tiny_net(seed: int) -> BinaryTTCNet:
@@ -134,14 +133,6 @@ def test_distillation_settings_are_checked(tmp_path):
         TrainConfig(distill_weight=-1.0)
     with pytest.raises(ValueError, match="another network of the student's model config"):
         make_trainer(tmp_path, BinaryTTCNet(get_config("cpu-small")), distill_weight=1.0)
-
-
-def cli_args(tmp_path, *extra):
-    parser = argparse.ArgumentParser()
-    train_cmd.add_parser(parser.add_subparsers())
-    return parser.parse_args(["train", "--data", "synthetic", "--config", "tiny", "--out", str(tmp_path / "m.pt"),
-                              "--steps", "2", "--val-every", "2", "--val-limit", "2", "--batch-size", "2",
-                              "--device", "cpu", *extra])
 
 
 def save_net(path, net, name):

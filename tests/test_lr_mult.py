@@ -1,7 +1,5 @@
 """Per-module learning-rate multipliers (``bittc train --lr-mult PREFIX=M``)."""
 
-import argparse
-
 import pytest
 import torch
 
@@ -10,7 +8,7 @@ from bittc_core.errors import CliError
 from bittc_core.model import BinaryTTCNet, get_config
 from bittc_core.train import TrainConfig
 from bittc_core.train.loop import param_groups
-from tests.train_helpers import fit_fixed_batch, make_trainer
+from tests.train_helpers import cli_args, fit_fixed_batch, make_trainer
 
 
 def _group_of(groups, param):
@@ -50,29 +48,21 @@ def test_a_multiplied_module_takes_that_multiple_of_the_step(tmp_path):
     assert moved["x10"][other] == pytest.approx(moved["plain"][other], rel=1e-3)
 
 
-def _cli(tmp_path, *extra):
-    parser = argparse.ArgumentParser()
-    train_cmd.add_parser(parser.add_subparsers())
-    return parser.parse_args(["train", "--data", "synthetic", "--config", "tiny", "--out", str(tmp_path / "m.pt"),
-                              "--steps", "2", "--val-every", "2", "--val-limit", "2", "--batch-size", "2",
-                              "--device", "cpu", *extra])
-
-
 def test_cli_refuses_a_prefix_that_names_nothing_and_writes_nothing(tmp_path):
     with pytest.raises(CliError, match=r"--lr-mult: .*starts with \['segnet.corr_'\] \(config 'tiny'\)"):
-        train_cmd.run(_cli(tmp_path, "--lr-mult", "segnet.corr_=10"))
+        train_cmd.run(cli_args(tmp_path, "--lr-mult", "segnet.corr_=10"))
     assert not list(tmp_path.glob("m*"))
 
 
 def test_run_records_the_multipliers_and_resume_keeps_them(tmp_path):
     import yaml
 
-    assert train_cmd.run(_cli(tmp_path, "--lr-mult", "segnet.head=4")) == 0
+    assert train_cmd.run(cli_args(tmp_path, "--lr-mult", "segnet.head=4")) == 0
     saved = yaml.safe_load((tmp_path / "m.config.yaml").read_text())
     assert saved["train_config"]["binary"]["lr_mults"] == [["segnet.head", 4.0]]
     for extra, match in ((["--resume"], "with --lr-mult segnet.head=4, not no --lr-mult"),
                          (["--resume", "--lr-mult", "segnet.head=2"], "not --lr-mult segnet.head=2")):
         with pytest.raises(CliError, match=match):
-            train_cmd.run(_cli(tmp_path, *extra))
-    assert train_cmd.run(_cli(tmp_path, "--resume", "--lr-mult", "segnet.head=4", "--steps", "3")) == 0
+            train_cmd.run(cli_args(tmp_path, *extra))
+    assert train_cmd.run(cli_args(tmp_path, "--resume", "--lr-mult", "segnet.head=4", "--steps", "3")) == 0
 

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import argparse
+
 import torch
 
 from bittc_core.data.synthetic import SyntheticConfig, SyntheticPairs
@@ -35,3 +37,14 @@ def fit_fixed_batch(tr: Trainer, batch: dict, steps: int) -> list[float]:
         tr.opt.step()
         losses.append(loss.item())
     return losses
+
+
+def cli_args(tmp_path, *extra) -> argparse.Namespace:
+    """``bittc train`` arguments for a 2-step run of ``tiny`` on the synthetic pairs, plus ``extra``."""
+    from bittc_core.cli import train_cmd
+
+    parser = argparse.ArgumentParser()
+    train_cmd.add_parser(parser.add_subparsers())
+    return parser.parse_args(["train", "--data", "synthetic", "--config", "tiny", "--out", str(tmp_path / "m.pt"),
+                              "--steps", "2", "--val-every", "2", "--val-limit", "2", "--batch-size", "2",
+                              "--device", "cpu", *extra])
