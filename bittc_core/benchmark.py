@@ -30,7 +30,7 @@ from bittc_core.model import BinaryTTCNet, count_parameters, get_config
 
 @dataclass(frozen=True)
 class BenchSettings:
-    config: str = "cpu-small"
+    config: str = "cpu-small-corr"
     height_px: int = 96
     width_px: int = 288
     thresholds: tuple[int, ...] = (1, 2, 4, 8, 16, 24)

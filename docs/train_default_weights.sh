@@ -13,7 +13,10 @@
 # binary network frozen (--freeze-binary: only the continuous refinement learns, SmoothL1 on the refined log eta;
 # end to end, BCE 0.1 + SmoothL1 0.9 as in the paper, this small model lost 0.05 mIoU);
 # then a seventh binary run from that checkpoint (the sixth's settings, 4,000 steps, seed 9)
-# and a shorter frozen continuous stage on it, whose best checkpoint ships.
+# and a shorter frozen continuous stage on it; then config cpu-small-corr grown from that
+# (the correlation volume, starting at zero), two more binary runs (the second with the
+# correlation convs at 10x the learning rate, --lr-mult) and a last frozen continuous stage,
+# whose best checkpoint ships.
 set -euo pipefail
 DATA=${1:-data/bittc_v1}
 DATA2=${2:-data/bittc_v2}
@@ -28,6 +31,9 @@ ACTOR_STEPS=${ACTOR_STEPS:-4000}
 CONT_STEPS=${CONT_STEPS:-1000}
 SEVENTH_STEPS=${SEVENTH_STEPS:-4000}
 CONT7_STEPS=${CONT7_STEPS:-500}
+CORR_STEPS=${CORR_STEPS:-4000}
+CORR2_STEPS=${CORR2_STEPS:-4000}
+CONT_CORR_STEPS=${CONT_CORR_STEPS:-500}
 mkdir -p "$OUT"
 bittc train --data "$DATA" --config cpu-small --stage flow --steps "$FLOW_STEPS" --seed 0 --out "$OUT/flow.pt"
 bittc train --data "$DATA" --config cpu-small --stage binary --steps "$BINARY_STEPS" --seed 0 --init "$OUT/flow.pt" --out "$OUT/binary.pt"
@@ -39,8 +45,13 @@ bittc train --data "$DATA2" --config cpu-small --stage binary --steps "$ACTOR_ST
 bittc train --data "$DATA2" --config cpu-small --stage continuous --freeze-binary --steps "$CONT_STEPS" --seed 0 --lr 5e-4 --val-every 250 --init "$OUT/binary_actor.pt" --out "$OUT/continuous.pt"
 bittc train --data "$DATA2" --config cpu-small --stage binary --steps "$SEVENTH_STEPS" --seed 9 --lr 1e-4 --val-every 1000 --val-limit 256 --lovasz-weight 0.5 --actor-weight 2 --init "$OUT/continuous.pt" --out "$OUT/binary7.pt"
 bittc train --data "$DATA2" --config cpu-small --stage continuous --freeze-binary --steps "$CONT7_STEPS" --seed 0 --lr 2e-4 --val-every 125 --init "$OUT/binary7.pt" --out "$OUT/continuous7.pt"
+# the correlation volume (cpu-small-corr, its convs starting at zero), then once more with
+# those convs at 10x the learning rate, then the frozen continuous stage on that
+bittc train --data "$DATA2" --config cpu-small-corr --stage binary --steps "$CORR_STEPS" --seed 13 --lr 1e-4 --val-every 1000 --val-limit 256 --lovasz-weight 0.5 --actor-weight 2 --init "$OUT/continuous7.pt" --out "$OUT/corr.pt"
+bittc train --data "$DATA2" --config cpu-small-corr --stage binary --steps "$CORR2_STEPS" --seed 14 --lr 1e-4 --val-every 1000 --val-limit 256 --lovasz-weight 0.5 --actor-weight 2 --lr-mult segnet.corr_=10 --init "$OUT/corr.pt" --out "$OUT/corr2.pt"
+bittc train --data "$DATA2" --config cpu-small-corr --stage continuous --freeze-binary --steps "$CONT_CORR_STEPS" --seed 0 --lr 2e-4 --val-every 125 --init "$OUT/corr2.pt" --out "$OUT/continuous_corr.pt"
 # ship the continuous stage's best checkpoint (by val MiD; the binary part is the same in all)
 python -c "import sys; from bittc_core.checkpoint import load_checkpoint, release_payload, save_checkpoint
 save_checkpoint(sys.argv[2], release_payload(load_checkpoint(sys.argv[1], map_location='cpu')))" \
-    "$OUT/continuous7.pt" bittc_core/weights/bittc_default.pt
+    "$OUT/continuous_corr.pt" bittc_core/weights/bittc_default.pt
 echo "wrote bittc_core/weights/bittc_default.pt"

@@ -8,7 +8,7 @@ from bittc_core.estimator import make_estimator
 
 def test_default_weights_load_and_run():
     assert DEFAULT_WEIGHTS.stat().st_size < 20 * 2**20
-    ckpt = load_checkpoint(DEFAULT_WEIGHTS, expected_config="cpu-small")
+    ckpt = load_checkpoint(DEFAULT_WEIGHTS, expected_config="cpu-small-corr")
     assert "train_state" not in ckpt
     est = make_estimator("bittc")
     rng = np.random.default_rng(0)

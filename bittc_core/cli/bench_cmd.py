@@ -12,7 +12,7 @@ def add_parser(sub) -> argparse.ArgumentParser:
     p = sub.add_parser("bench", help="CPU latency of the network vs. number of thresholds",
                        description="Streaming latency at 96x288 for K = 1, 2, 4, 8, 16, 24 thresholds, "
                        "binary and continuous, plain and flip-averaged, with the flow baseline timed in the same run.")
-    p.add_argument("--config", default="cpu-small", help="model config (ignored with --weights)")
+    p.add_argument("--config", default="cpu-small-corr", help="model config (ignored with --weights; default: the shipped one)")
     p.add_argument("--weights", default=None, help="time this checkpoint instead of random weights")
     p.add_argument("--calls", type=int, default=30, help="timed calls per setting (default 30)")
     p.add_argument("--threads", type=int, default=2, help="torch threads (default 2)")
