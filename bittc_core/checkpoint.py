@@ -19,12 +19,11 @@ import torch
 
 from bittc_core.errors import CliError
 from bittc_core.model import CONFIGS, BinaryTTCNet, ModelConfig, get_config
-from bittc_core.model.config import GROWTH_COUNTS, GROWTH_FLAGS
+from bittc_core.model.config import GROWTH_COUNTS, GROWTH_FLAGS, GROWTH_SWITCHES
 
 DEFAULT_WEIGHTS = Path(__file__).resolve().parent / "weights" / "bittc_default.pt"
 TRAIN_DEFAULT_HINT = (
-    "bittc train --data DIR --config cpu-small --stage all "
-    "--out bittc_core/weights/bittc_default.pt"
+    "bash docs/train_default_weights.sh DATA_V1 DATA_V2 OUT (README: Training and the shipped weights)"
 )
 REQUIRED_KEYS = ("config", "config_name", "state_dict", "train_meta")
 
@@ -118,8 +117,9 @@ def init_network(path: str | os.PathLike, config_name: str) -> BinaryTTCNet:
     """A network of config ``config_name`` starting from the weights of ``path``.
 
     The checkpoint's config must be that config, or one it grows from: the same sizes
-    with fewer growth blocks or without the global-context block (``GROWTH_COUNTS``,
-    ``GROWTH_FLAGS`` in ``bittc_core.model.config``). The added modules keep their
+    with fewer growth blocks, without the global-context block or without the correlation
+    volume (``GROWTH_COUNTS``, ``GROWTH_FLAGS``, ``GROWTH_SWITCHES`` in
+    ``bittc_core.model.config``). The added modules keep their
     initialisation, the identity, so the network computes what the checkpoint did.
     """
     ckpt = load_checkpoint(path, map_location="cpu")
@@ -130,7 +130,8 @@ def init_network(path: str | os.PathLike, config_name: str) -> BinaryTTCNet:
     if CONFIGS.get(name) != source or not grows_into(source, target):
         raise CheckpointError(f"--init {str(path)!r}: its config ({name!r}) is neither "
                               f"{config_name!r} nor a config {config_name!r} grows from "
-                              "(the same sizes with fewer growth blocks or no global-context block)")
+                              "(the same sizes with fewer growth blocks, no global-context block or no "
+                              "correlation volume)")
     net = BinaryTTCNet(target)
     added = set(net.state_dict()) - set(BinaryTTCNet(source).state_dict())
     missing, unexpected = net.load_state_dict(ckpt["state_dict"], strict=False)
@@ -145,10 +146,13 @@ def grows_into(source: ModelConfig, target: ModelConfig) -> bool:
     """True when ``target`` is ``source`` plus identity-at-init modules only."""
     if source == target:
         return False
-    fields = (*GROWTH_COUNTS, *GROWTH_FLAGS)
+    fields = (*GROWTH_COUNTS, *GROWTH_FLAGS, *GROWTH_SWITCHES)
+    if source.corr_groups == 0:
+        fields += ("corr_log_step",)  # unused without the volume
     if dataclasses.replace(source, **{n: getattr(target, n) for n in fields}) != target:
         return False  # some other field differs
-    return all(getattr(source, n) <= getattr(target, n) for n in fields)
+    switched = all(getattr(source, n) in (0, getattr(target, n)) for n in GROWTH_SWITCHES)
+    return switched and all(getattr(source, n) <= getattr(target, n) for n in (*GROWTH_COUNTS, *GROWTH_FLAGS))
 
 
 def pick_device(name: str = "auto") -> torch.device:

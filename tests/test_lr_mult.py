@@ -49,8 +49,11 @@ def test_a_multiplied_module_takes_that_multiple_of_the_step(tmp_path):
 
 
 def test_cli_refuses_a_prefix_that_names_nothing_and_writes_nothing(tmp_path):
-    with pytest.raises(CliError, match=r"--lr-mult: .*starts with \['segnet.corr_'\] \(config 'tiny'\)"):
+    with pytest.raises(CliError, match=r"--lr-mult: .*starts with \['segnet.corr_'\] \(config 'tiny', --stage binary\)"):
         train_cmd.run(cli_args(tmp_path, "--lr-mult", "segnet.corr_=10"))
+    # a module the stage freezes: refused before the first stage runs
+    with pytest.raises(CliError, match=r"starts with \['segnet.head'\] .*--stage continuous --freeze-binary\)"):
+        train_cmd.run(cli_args(tmp_path, "--stage", "all", "--freeze-binary", "--lr-mult", "segnet.head=2"))
     assert not list(tmp_path.glob("m*"))
 
 
@@ -66,3 +69,32 @@ def test_run_records_the_multipliers_and_resume_keeps_them(tmp_path):
             train_cmd.run(cli_args(tmp_path, *extra))
     assert train_cmd.run(cli_args(tmp_path, "--resume", "--lr-mult", "segnet.head=4", "--steps", "3")) == 0
 
+
+def test_resume_accepts_the_flags_in_another_order(tmp_path):
+    flags = ["--lr-mult", "segnet.head=4", "--lr-mult", "refine.=2"]
+    assert train_cmd.run(cli_args(tmp_path, *flags)) == 0
+    assert train_cmd.run(cli_args(tmp_path, "--resume", *flags[2:], *flags[:2], "--steps", "3")) == 0
+
+
+def test_the_training_loop_sets_each_groups_rate(tmp_path):
+    """Trainer.run itself (not a test helper) scales the scheduled rate per group."""
+    tr = make_trainer(tmp_path, steps=1, lr_mults=(("segnet.head", 10.0),))
+    tr.run()
+    rates = {g["lr_mult"]: g["lr"] for g in tr.opt.param_groups}
+    assert set(rates) == {1.0, 10.0} and rates[10.0] == pytest.approx(10 * rates[1.0])
+    assert rates[1.0] == pytest.approx(tr.lr_at(0))
+
+
+
+def test_a_run_saved_before_multipliers_existed_resumes(tmp_path):
+    """Resumable checkpoints written before ``lr_mults`` hold optimizer groups without an
+    ``lr_mult``: they resume at 1x."""
+    tr = make_trainer(tmp_path, steps=2)
+    tr.run()
+    ckpt = torch.load(tr.paths.last, map_location="cpu", weights_only=True)
+    for group in ckpt["train_state"]["optimizer"]["param_groups"]:
+        del group["lr_mult"]
+    torch.save(ckpt, tr.paths.last)
+    again = make_trainer(tmp_path, steps=4)
+    again.resume()
+    assert again.run()["steps"] == 4

@@ -73,13 +73,18 @@ def _make_decoder_block_live(net):
     net.segnet.dec_extra[-1][0].body[2].weight.fill_(0.5)  # the finest level's last norm
 
 
-def _make_correlation_live(net):
-    net.segnet.corr_last.weight.fill_(0.5)
+def _make_correlation_first_live(net):
+    net.segnet.corr_first.weight.fill_(0.5)  # into SegNet's first conv
+
+
+def _make_correlation_last_live(net):
+    net.segnet.corr_last.weight.fill_(0.5)  # into the finest decoder conv
 
 
 @pytest.mark.parametrize("grown, make_live", [("cpu-small-gc", _make_context_live),
                                               ("cpu-medium", _make_decoder_block_live),
-                                              ("cpu-small-corr", _make_correlation_live)])
+                                              ("cpu-small-corr", _make_correlation_first_live),
+                                              ("cpu-small-corr", _make_correlation_last_live)])
 def test_init_grows_cpu_small_as_the_identity(tmp_path, grown, make_live):
     torch.manual_seed(0)
     plain = BinaryTTCNet(get_config("cpu-small")).eval()
@@ -125,6 +130,11 @@ def test_grows_into_only_adds_identity_modules():
     assert grows_into(tiny, dataclasses.replace(tiny, refine_extra_blocks=2, global_context=True))
     assert not grows_into(tiny, tiny)  # nothing added
     assert not grows_into(dataclasses.replace(tiny, dec_extra_blocks=2), dataclasses.replace(tiny, dec_extra_blocks=1))
+    # the correlation volume is switched on (0 -> n groups, any step), never resized
+    corr = dataclasses.replace(tiny, corr_groups=2)
+    assert grows_into(tiny, corr) and grows_into(tiny, dataclasses.replace(corr, corr_log_step=0.05))
+    assert not grows_into(corr, dataclasses.replace(tiny, corr_groups=4))
+    assert not grows_into(corr, dataclasses.replace(corr, corr_log_step=0.05))
     assert not grows_into(tiny, dataclasses.replace(tiny, dec_extra_blocks=1, feat_channels=12))  # resized
 
 

@@ -117,7 +117,7 @@ def test_registered_config_sizes():
     assert 88e6 < paper < 94e6  # "about 91 M"
     assert tiny < small < gc < 2e6  # cpu-small-gc = cpu-small + the global-context block
     assert small < medium < 2e6  # cpu-medium = cpu-small + growth blocks
-    assert small < corr < small + 10_000  # cpu-small-corr = cpu-small + two small convs
+    assert corr - small == 3 * 8 * 16 * (9 + 1)  # cpu-small-corr: 3 warps x 8 groups into 16-ch 3x3 and 1x1 convs
     assert CONFIGS["paper"].norm == "none" and CONFIGS["cpu-small"].norm != "none"
 
 
@@ -158,5 +158,6 @@ def test_growth_counts_must_not_be_negative():
 def test_correlation_groups_must_divide_the_features():
     with pytest.raises(ValueError, match="corr_groups=3: must divide feat_channels=8"):
         dataclasses.replace(CONFIGS["tiny"], corr_groups=3)
-    with pytest.raises(ValueError, match="corr_log_step=0.0"):
-        dataclasses.replace(CONFIGS["tiny"], corr_groups=2, corr_log_step=0.0)
+    for step in (0.0, float("nan")):
+        with pytest.raises(ValueError, match=f"corr_log_step={step}"):
+            dataclasses.replace(CONFIGS["tiny"], corr_groups=2, corr_log_step=step)

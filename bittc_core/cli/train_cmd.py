@@ -28,7 +28,8 @@ def add_parser(sub) -> argparse.ArgumentParser:
     p.add_argument("--out", required=True, help="best checkpoint path, *.pt")
     p.add_argument("--resume", action="store_true", help="continue from <stem>.last.pt")
     p.add_argument("--init", default=None, help="start from the weights of this checkpoint (same config, or a config "
-                   "this one grows from, such as cpu-small for cpu-medium: the added blocks start as the identity)")
+                   "this one grows from, such as cpu-small for cpu-medium or cpu-small-corr: the added blocks start as the "
+                   "identity)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--steps", type=int, default=2000, help="optimiser steps per stage (default 2000)")
     p.add_argument("--batch-size", type=int, default=8)
@@ -54,8 +55,9 @@ def add_parser(sub) -> argparse.ArgumentParser:
     p.add_argument("--distill-weight", type=float, default=None,
                    help="with --teacher: weight of the distillation BCE beside the ground-truth BCE (default 1)")
     p.add_argument("--lr-mult", action="append", default=[], metavar="PREFIX=M",
-                   help="parameters whose names start with PREFIX learn at M x the learning rate (repeatable; "
-                        "e.g. segnet.corr_=10 for the correlation convs that --init added at zero)")
+                   help="parameters whose names start with PREFIX learn at M x the learning rate, and decay "
+                        "at M x the weight decay (repeatable; e.g. segnet.corr_=10 for the correlation convs "
+                        "that --init added at zero; --resume needs the same flags)")
     p.add_argument("--freeze-binary", action="store_true",
                    help="continuous stage: train the continuous refinement only, the binary network frozen")
     return p
@@ -126,7 +128,7 @@ def parse_lr_mults(values: list[str]) -> tuple[tuple[str, float], ...]:
 def _check_same_lr_mults(name: str, meta: dict, lr_mults: tuple[tuple[str, float], ...]) -> None:
     """A resumed run keeps its learning-rate multipliers (its optimizer's groups)."""
     old = tuple((str(p), float(m)) for p, m in meta.get("train_config", {}).get("lr_mults", ()))
-    if old != lr_mults:
+    if sorted(old) != sorted(lr_mults):  # the groups do not depend on the flags' order
         def show(mults):
             return " ".join(f"--lr-mult {p}={m:g}" for p, m in mults) or "no --lr-mult"
         raise CliError(f"--resume: {name} was trained with {show(old)}, not {show(lr_mults)}")
@@ -157,7 +159,7 @@ def run(args) -> int:
     from bittc_core.model import BinaryTTCNet, get_config
     from bittc_core.train import STAGES, RunPaths, TrainConfig, Trainer
     from bittc_core.train.data import open_split
-    from bittc_core.train.loop import param_groups
+    from bittc_core.train.loop import frozen_prefixes, param_groups
 
     paths = RunPaths.from_out(args.out)
     try:
@@ -178,10 +180,6 @@ def run(args) -> int:
     else:
         net = BinaryTTCNet(get_config(args.config))
     lr_mults = parse_lr_mults(args.lr_mult)
-    try:
-        param_groups(net, lr_mults)
-    except ValueError as err:
-        raise CliError(f"--lr-mult: {err} (config {args.config!r})") from None
     teacher, distill_weight = None, 0.0
     if args.teacher:
         distill_weight = args.distill_weight or 1.0
@@ -215,6 +213,12 @@ def run(args) -> int:
     stage_cfgs = {stage: dataclasses.replace(base, stage=stage,
                                              freeze_binary=args.freeze_binary and stage == "continuous")
                   for stage in stages}
+    for stage, cfg in stage_cfgs.items():  # before anything is written or trained
+        try:
+            param_groups(net, lr_mults, frozen_prefixes(cfg))
+        except ValueError as err:
+            frozen = " --freeze-binary" if cfg.freeze_binary else ""
+            raise CliError(f"--lr-mult: {err} (config {args.config!r}, --stage {stage}{frozen})") from None
     write_yaml_atomic(paths.config, {
         "argv": list(sys.argv),
         "data": args.data, "device": str(device), "stages": stages,

@@ -16,6 +16,7 @@ Conventions shared by every config (see ``bittc_core.model.network``):
 from __future__ import annotations
 
 import dataclasses
+import math
 from dataclasses import dataclass, field
 
 NORMS = ("none", "batch", "group")
@@ -24,8 +25,12 @@ NORMS = ("none", "batch", "group")
 #: larger one unchanged (``checkpoint.init_network``) and training goes on from there.
 #: Unchanged in eval mode, exactly; in train mode the finest decoder level's batch norm
 #: takes its statistics over a crop widened by 2 px a side per decoder growth block.
-GROWTH_COUNTS = ("feat_extra_blocks", "dec_extra_blocks", "refine_extra_blocks", "corr_groups")
+GROWTH_COUNTS = ("feat_extra_blocks", "dec_extra_blocks", "refine_extra_blocks")
 GROWTH_FLAGS = ("global_context",)
+#: Growth switches: counts that may only be switched on (0 -> n) by growth: the
+#: correlation volume's convs start at zero, but its width depends on the count, so
+#: n -> m != n does not carry over. With the volume off, ``corr_log_step`` is free.
+GROWTH_SWITCHES = ("corr_groups",)
 
 
 @dataclass(frozen=True)
@@ -83,13 +88,13 @@ class ModelConfig:
                 f"ModelConfig: bad continuous volume eta [{self.cont_eta_min}, "
                 f"{self.cont_eta_max}] x {self.cont_levels} levels"
             )
-        for name in GROWTH_COUNTS:
+        for name in (*GROWTH_COUNTS, *GROWTH_SWITCHES):
             if getattr(self, name) < 0:
                 raise ValueError(f"ModelConfig.{name}={getattr(self, name)}: must be >= 0")
         if self.corr_groups and self.feat_channels % self.corr_groups:
             raise ValueError(f"ModelConfig.corr_groups={self.corr_groups}: must divide "
                              f"feat_channels={self.feat_channels}")
-        if self.corr_log_step <= 0.0:
+        if not 0.0 < self.corr_log_step < math.inf:
             raise ValueError(f"ModelConfig.corr_log_step={self.corr_log_step}: must be > 0")
         if self.pad_factor < 1.0:
             raise ValueError(f"ModelConfig.pad_factor={self.pad_factor}: must be >= 1")

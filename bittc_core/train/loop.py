@@ -73,15 +73,26 @@ def _forever(loader: DataLoader, epoch: int = 0):
 
 
 
-def param_groups(net: torch.nn.Module, lr_mults: tuple[tuple[str, float], ...]) -> list[dict]:
-    """The trainable parameters as AdamW groups, each with its ``lr_mult``: a parameter
-    whose name starts with a prefix of ``lr_mults`` learns at that multiple of the
-    scheduled rate (the longest matching prefix wins), every other one at 1x. A prefix
-    that names no trainable parameter is an error (a typo would silently do nothing)."""
+#: what ``freeze_binary`` freezes (their batch-norm statistics too): the binary network
+BINARY_MODULES = ("features", "segnet", "refine")
+
+
+def frozen_prefixes(cfg: TrainConfig) -> tuple[str, ...]:
+    """Parameter-name prefixes that a stage of ``cfg`` does not train."""
+    return tuple(f"{m}." for m in BINARY_MODULES) if cfg.freeze_binary else ()
+
+
+def param_groups(net: torch.nn.Module, lr_mults: tuple[tuple[str, float], ...],
+                 frozen: tuple[str, ...] = ()) -> list[dict]:
+    """The trainable parameters (``requires_grad``, not under a ``frozen`` prefix) as AdamW
+    groups, each with its ``lr_mult``: a parameter whose name starts with a prefix of
+    ``lr_mults`` learns at that multiple of the scheduled rate (the longest matching
+    prefix wins), every other one at 1x. A prefix that names no trainable parameter is an
+    error (a typo would silently do nothing)."""
     groups: dict[float, list[torch.nn.Parameter]] = {}
     used = set()
     for name, q in net.named_parameters():
-        if not q.requires_grad:
+        if not q.requires_grad or name.startswith(frozen):
             continue
         match = max((p for p, _ in lr_mults if name.startswith(p)), key=len, default=None)
         used.add(match)
@@ -125,7 +136,7 @@ class Trainer:
 
     def frozen_modules(self) -> list[torch.nn.Module]:
         net = self.net
-        return [net.features, net.segnet, net.refine] if self.cfg.freeze_binary else []
+        return [getattr(net, m) for m in BINARY_MODULES] if self.cfg.freeze_binary else []
 
     def _train_mode(self) -> None:
         """Training mode, except frozen modules (their batch-norm statistics stay put)."""
@@ -231,7 +242,10 @@ class Trainer:
         self.net.load_state_dict(ckpt["state_dict"])
         if state["stage"] != self.cfg.stage:
             raise ValueError(f"{self.paths.last} is at stage {state['stage']!r}, not {self.cfg.stage!r}")
-        self.opt.load_state_dict(state["optimizer"])
+        mults = [group["lr_mult"] for group in self.opt.param_groups]
+        self.opt.load_state_dict(state["optimizer"])  # replaces the groups' settings too:
+        for group, mult in zip(self.opt.param_groups, mults):  # keep this run's multipliers
+            group["lr_mult"] = mult  # (a state saved before lr_mults existed has none)
         self.step, self.best = int(state["step"]), float(state["best"])
         self.gen.set_state(state["gen"])
         self.loader_gen.set_state(state["loader_gen"])
