@@ -72,7 +72,6 @@ def _forever(loader: DataLoader, epoch: int = 0):
         epoch += 1
 
 
-
 #: what ``freeze_binary`` freezes (their batch-norm statistics too): the binary network
 BINARY_MODULES = ("features", "segnet", "refine")
 
@@ -242,10 +241,12 @@ class Trainer:
         self.net.load_state_dict(ckpt["state_dict"])
         if state["stage"] != self.cfg.stage:
             raise ValueError(f"{self.paths.last} is at stage {state['stage']!r}, not {self.cfg.stage!r}")
+        # loading replaces each group's settings with the saved ones; keep this run's
+        # multipliers (a state saved before lr_mults existed has none)
         mults = [group["lr_mult"] for group in self.opt.param_groups]
-        self.opt.load_state_dict(state["optimizer"])  # replaces the groups' settings too:
-        for group, mult in zip(self.opt.param_groups, mults):  # keep this run's multipliers
-            group["lr_mult"] = mult  # (a state saved before lr_mults existed has none)
+        self.opt.load_state_dict(state["optimizer"])
+        for group, mult in zip(self.opt.param_groups, mults):
+            group["lr_mult"] = mult
         self.step, self.best = int(state["step"]), float(state["best"])
         self.gen.set_state(state["gen"])
         self.loader_gen.set_state(state["loader_gen"])
