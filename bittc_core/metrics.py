@@ -23,8 +23,12 @@ eta_i = tau_i / (tau_i + dt_s).
   actor pixels and of static pixels apart; when ``add`` gets the ego speed, the images
   grouped by it (``EGO_SPEED_EDGES_MPS``) with their mIoU and the error of their static
   pixels at tau = 1 s split into false inside and missed (a standing ego's static world
-  has tau = inf, a moving one's ground tau = Z / v_ego). Thresholds are keyed by
-  ``threshold_key``.
+  has tau = inf, a moving one's ground tau = Z / v_ego); the errors of the mIoU maps by
+  the pixel's margin to the threshold, m = |log eta - log eta_i| (``MARGIN_EDGES``: the
+  share of all errors in each margin group and the error rate there), and the mIoU the
+  same maps would score if every error within a margin ``FORGIVEN_MARGINS`` were right
+  (how much of the loss a more precise reading of eta near the threshold can win back).
+  Thresholds are keyed by ``threshold_key``.
 """
 
 from __future__ import annotations
@@ -46,6 +50,8 @@ INSIDE_SHARE_LABELS = ("0", "0-5%", "5-20%", "20-100%")
 EGO_SPEED_EDGES_MPS = (0.5, 5.0, 15.0)  # [m/s] ego-speed groups of the breakdown
 EGO_SPEED_LABELS = ("<0.5", "0.5-5", "5-15", ">=15")
 STATIC_ERROR_TAU_S = 1.0  # [s] threshold of the static-pixel error by ego speed (one of ERROR_RATE_TAUS_S)
+MARGIN_EDGES = (0.005, 0.01, 0.02, 0.04, 0.08, 0.16)  # [log eta] margin groups of the breakdown
+FORGIVEN_MARGINS = (0.01, 0.02, 0.04)  # [log eta] margins of the breakdown's forgiving mIoU
 
 
 def miou_thresholds_s(dt_s: float, levels: int = MIOU_LEVELS) -> np.ndarray:
@@ -93,6 +99,12 @@ def image_miou(ious: list[float]) -> float | None:
     return float(np.mean(finite)) if finite else None
 
 
+def margin_labels() -> list[str]:
+    """Labels of the margin groups: "<0.005", "0.005-0.01", ..., ">=0.16"."""
+    e = MARGIN_EDGES
+    return [f"<{e[0]:g}", *(f"{a:g}-{b:g}" for a, b in zip(e[:-1], e[1:])), f">={e[-1]:g}"]
+
+
 def mid_terms(eta_hat: np.ndarray, eta: np.ndarray, valid: np.ndarray) -> tuple[float, int]:
     """(sum of |log eta_hat - log eta|, pixel count) over the MiD pixels."""
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -115,6 +127,8 @@ class MetricAccumulator:
     _by_share: dict = field(default_factory=dict)  # label -> [[two-class iou], [inside iou], [false inside px]]
     _mid_parts: dict = field(default_factory=dict)  # "actor" / "static" -> [sum, count]
     _by_speed: dict = field(default_factory=dict)  # label -> [[image miou], [false inside, missed, static px]]
+    _margin: np.ndarray = field(init=False)  # (2, groups): errors, pixels of the mIoU maps by margin
+    _forgiven: list = field(default_factory=list)  # per image: (FORGIVEN_MARGINS, MIOU_LEVELS) ious
 
     def __post_init__(self) -> None:
         self.miou_thresholds_s = miou_thresholds_s(self.dt_s)
@@ -123,6 +137,7 @@ class MetricAccumulator:
         self._errors = {t: [0, 0] for t in ERROR_RATE_TAUS_S}
         self._actor = {t: np.zeros((2, 2), np.int64) for t in ACTOR_TAUS_S}
         self._by_speed = {label: [[], np.zeros(3, np.int64)] for label in EGO_SPEED_LABELS}
+        self._margin = np.zeros((2, len(MARGIN_EDGES) + 1), np.int64)
 
     @property
     def thresholds_s(self) -> np.ndarray:
@@ -140,10 +155,22 @@ class MetricAccumulator:
         n = len(self.miou_thresholds_s)
         valid_px = int(valid.sum())
         ious = []
+        forgiven = np.full((len(FORGIVEN_MARGINS), n), np.nan)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            log_eta = np.log(eta)
         for i, t in enumerate(self.miou_thresholds_s):
-            truth = inside_geofence(eta, tau_to_eta(t, self.dt_s))
+            eta_i = tau_to_eta(t, self.dt_s)
+            truth = inside_geofence(eta, eta_i)
             counts = class_counts(pred[i], truth, valid)
             ious.append(two_class_iou(counts))
+            # eta <= 0 (behind the camera) or nan: never near a threshold, margin inf
+            margin = np.where(np.isfinite(log_eta), np.abs(log_eta - np.log(eta_i)), np.inf)
+            wrong = (pred[i] != truth) & valid
+            group = np.searchsorted(MARGIN_EDGES, margin, side="right")
+            self._margin[0] += np.bincount(group[wrong], minlength=len(MARGIN_EDGES) + 1)
+            self._margin[1] += np.bincount(group[valid], minlength=len(MARGIN_EDGES) + 1)
+            for j, m in enumerate(FORGIVEN_MARGINS):
+                forgiven[j, i] = two_class_iou(class_counts(np.where(margin < m, truth, pred[i]), truth, valid))
             if np.isfinite(ious[-1]):
                 inside_px = int(np.sum(truth & valid))
                 group = self._by_share[inside_share_group(inside_px, valid_px)]
@@ -152,6 +179,7 @@ class MetricAccumulator:
                     group[1].append(counts[0, 0] / counts[0, 1])
                     group[2].append(int(counts[0, 1]) - inside_px)  # union minus truth: false inside
         self._iou_by_threshold.append(ious)
+        self._forgiven.append(forgiven)
         actors = valid & (instance > 0)
         for j, t in enumerate(ERROR_RATE_TAUS_S):
             truth = inside_geofence(eta, tau_to_eta(t, self.dt_s))
@@ -209,6 +237,14 @@ class MetricAccumulator:
                     for label, g in self._by_share.items()}
         mid = {f"mid_{part}": (s / c * MID_SCALE if c else nan) for part, (s, c) in self._mid_parts.items()}
         out = {"miou_by_threshold_s": by_threshold, "by_inside_share": by_share, **mid}
+        errors, pixels = self._margin
+        out["errors_by_margin_log_eta"] = {
+            label: {"share_of_errors": (e / errors.sum() if errors.sum() else nan),
+                    "error_rate": (e / p if p else nan), "share_of_pixels": (p / pixels.sum() if pixels.sum() else nan)}
+            for label, e, p in zip(margin_labels(), errors, pixels)}
+        images = [[image_miou(list(row)) for row in f] for f in self._forgiven]
+        out["miou_forgiving_margin_log_eta"] = {
+            f"{m:g}": mean([x[j] for x in images if x[j] is not None]) for j, m in enumerate(FORGIVEN_MARGINS)}
         if any(len(g[0]) or g[1][2] for g in self._by_speed.values()):
             key = f"{STATIC_ERROR_TAU_S:g}s"
             out["by_ego_speed_mps"] = {

@@ -60,6 +60,36 @@ def test_accumulator_perfect_and_inverted_predictions():
     assert r["mid"] == pytest.approx(np.log(1.01) * 1e4)
 
 
+def test_breakdown_errors_by_margin_to_the_threshold():
+    """One image whose pixels sit at known margins from one mIoU level's eta; that level's
+    map is read 0.015 too high in log eta (the pixels just inside fall out), the others exact."""
+    dt = 0.1
+    acc = MetricAccumulator(dt_s=dt)
+    k = 5
+    eta_k = tau_to_eta(acc.miou_thresholds_s[k], dt)
+    margins = np.array([-0.1, -0.012, -0.003, 0.003, 0.012, 0.1])  # log eta - log eta_k
+    eta = np.tile(eta_k * np.exp(margins), (2, 1))
+    valid = np.ones(eta.shape, bool)
+    prob = np.stack([(eta <= tau_to_eta(t, dt)) for t in acc.thresholds_s]).astype(np.float32)
+    prob[k] = eta * np.exp(0.015) <= eta_k
+    acc.add(prob, None, eta, valid, np.zeros(eta.shape, np.int64))
+    b = acc.result()["breakdown"]
+    by = b["errors_by_margin_log_eta"]
+    # the wrong pixels: margins -0.012 and -0.003 (two rows each), 4 errors in all
+    assert by["<0.005"]["share_of_errors"] == pytest.approx(0.5)
+    assert by["0.01-0.02"]["share_of_errors"] == pytest.approx(0.5)
+    assert by["0.005-0.01"]["share_of_errors"] == 0.0
+    # within < 0.005 sit the +-0.003 pixels of threshold k only: half of them wrong
+    assert by["<0.005"]["error_rate"] == pytest.approx(0.5)
+    assert sum(g["share_of_pixels"] for g in by.values()) == pytest.approx(1.0)
+    f = b["miou_forgiving_margin_log_eta"]
+    assert f["0.02"] == pytest.approx(1.0) and f["0.04"] == pytest.approx(1.0)
+    # forgiving < 0.01 rights the -0.003 pixels only; threshold k keeps the -0.012 ones wrong:
+    # inside I=4, U=6; outside I=6, U=8 -> (2/3 + 3/4) / 2, averaged with 9 perfect levels
+    assert f["0.01"] == pytest.approx((9 + (2 / 3 + 3 / 4) / 2) / 10)
+    assert acc.result()["miou"] < f["0.01"]
+
+
 def test_breakdown_groups_pairs_by_inside_share():
     dt = 0.1
     acc = MetricAccumulator(dt_s=dt)

@@ -110,6 +110,12 @@ def format_table(r: dict) -> str:
             for label, g in b["by_ego_speed_mps"].items():
                 lines.append(f"  {label:>8}: {g['images']:>6} images, mIoU {g['miou']:.3f}, "
                              f"{g['static_false_inside_' + key]:.3f} / {g['static_missed_' + key]:.3f}")
+        if "errors_by_margin_log_eta" in b:
+            lines.append("errors of the mIoU maps by margin |log eta - log eta_i|: share of errors / error rate / share of pixels:")
+            for label, g in b["errors_by_margin_log_eta"].items():
+                lines.append(f"  {label:>10}: {g['share_of_errors']:.3f} / {g['error_rate']:.3f} / {g['share_of_pixels']:.3f}")
+            lines.append("mIoU if the errors within a margin were right: " + ", ".join(
+                f"< {m} {v:.3f}" for m, v in b["miou_forgiving_margin_log_eta"].items()))
     return "\n".join(lines)
 
 
