@@ -81,15 +81,20 @@ def _make_correlation_last_live(net):
     net.segnet.corr_last.weight.fill_(0.5)  # into the finest decoder conv
 
 
-@pytest.mark.parametrize("grown, make_live", [("cpu-small-gc", _make_context_live),
-                                              ("cpu-medium", _make_decoder_block_live),
-                                              ("cpu-small-corr", _make_correlation_first_live),
-                                              ("cpu-small-corr", _make_correlation_last_live)])
-def test_init_grows_cpu_small_as_the_identity(tmp_path, grown, make_live):
+@pytest.mark.parametrize("source, grown, make_live", [
+    ("cpu-small", "cpu-small-gc", _make_context_live),
+    ("cpu-small", "cpu-medium", _make_decoder_block_live),
+    ("cpu-small", "cpu-small-corr", _make_correlation_first_live),
+    ("cpu-small", "cpu-small-corr", _make_correlation_last_live),
+    ("cpu-small-corr", "cpu-small-corr-gc", _make_context_live)])
+def test_init_grows_as_the_identity(tmp_path, source, grown, make_live):
     torch.manual_seed(0)
-    plain = BinaryTTCNet(get_config("cpu-small")).eval()
+    plain = BinaryTTCNet(get_config(source)).eval()
+    if source == "cpu-small-corr":  # a trained volume: live, so the grown net must keep it
+        with torch.no_grad():
+            _make_correlation_first_live(plain)
     path = tmp_path / "plain.pt"
-    save_checkpoint(path, make_payload(plain, "cpu-small", {}))
+    save_checkpoint(path, make_payload(plain, source, {}))
     net = init_network(path, grown).eval()
     assert net.config == get_config(grown)
     with torch.no_grad():

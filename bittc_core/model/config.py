@@ -129,6 +129,9 @@ class ModelConfig:
 #: ``cpu-small-corr``: ``cpu-small`` plus the group-wise correlation volume (8 groups of 2
 #: channels, three warps per threshold) fed to SegNet's first and last convs, both
 #: starting at zero, trained from a ``cpu-small`` checkpoint (README: what it measured).
+#: ``cpu-small-corr-gc``: ``cpu-small-corr`` plus the global-context block (an
+#: experiment: trained from a ``cpu-small-corr`` checkpoint with both added parts at a
+#: raised learning rate, ``--lr-mult``; README: what it measured).
 #: ``tiny``: unit tests only.
 _CPU_SMALL = ModelConfig(
     stem_channels=16,
@@ -153,6 +156,7 @@ CONFIGS: dict[str, ModelConfig] = {
     "cpu-small-gc": dataclasses.replace(_CPU_SMALL, global_context=True),
     "cpu-medium": dataclasses.replace(_CPU_SMALL, feat_extra_blocks=3, dec_extra_blocks=1),
     "cpu-small-corr": dataclasses.replace(_CPU_SMALL, corr_groups=8),
+    "cpu-small-corr-gc": dataclasses.replace(_CPU_SMALL, corr_groups=8, global_context=True),
     "tiny": ModelConfig(
         stem_channels=8,
         feat_channels=8,
