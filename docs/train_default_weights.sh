@@ -14,9 +14,9 @@
 # end to end, BCE 0.1 + SmoothL1 0.9 as in the paper, this small model lost 0.05 mIoU);
 # then a seventh binary run from that checkpoint (the sixth's settings, 4,000 steps, seed 9)
 # and a shorter frozen continuous stage on it; then config cpu-small-corr grown from that
-# (the correlation volume, starting at zero), two more binary runs (the second with the
-# correlation convs at 10x the learning rate, --lr-mult) and a last frozen continuous stage,
-# whose best checkpoint ships.
+# (the correlation volume, starting at zero), three more binary runs (the second and the
+# third with the correlation convs at 10x the learning rate, --lr-mult) and a last frozen
+# continuous stage, whose best checkpoint ships.
 set -euo pipefail
 DATA=${1:-data/bittc_v1}
 DATA2=${2:-data/bittc_v2}
@@ -33,6 +33,7 @@ SEVENTH_STEPS=${SEVENTH_STEPS:-4000}
 CONT7_STEPS=${CONT7_STEPS:-500}
 CORR_STEPS=${CORR_STEPS:-4000}
 CORR2_STEPS=${CORR2_STEPS:-4000}
+CORR3_STEPS=${CORR3_STEPS:-4000}
 CONT_CORR_STEPS=${CONT_CORR_STEPS:-500}
 mkdir -p "$OUT"
 bittc train --data "$DATA" --config cpu-small --stage flow --steps "$FLOW_STEPS" --seed 0 --out "$OUT/flow.pt"
@@ -46,10 +47,11 @@ bittc train --data "$DATA2" --config cpu-small --stage continuous --freeze-binar
 bittc train --data "$DATA2" --config cpu-small --stage binary --steps "$SEVENTH_STEPS" --seed 9 --lr 1e-4 --val-every 1000 --val-limit 256 --lovasz-weight 0.5 --actor-weight 2 --init "$OUT/continuous.pt" --out "$OUT/binary7.pt"
 bittc train --data "$DATA2" --config cpu-small --stage continuous --freeze-binary --steps "$CONT7_STEPS" --seed 0 --lr 2e-4 --val-every 125 --init "$OUT/binary7.pt" --out "$OUT/continuous7.pt"
 # the correlation volume (cpu-small-corr, its convs starting at zero), then once more with
-# those convs at 10x the learning rate, then the frozen continuous stage on that
+# those convs at 10x the learning rate, twice, then the frozen continuous stage on that
 bittc train --data "$DATA2" --config cpu-small-corr --stage binary --steps "$CORR_STEPS" --seed 13 --lr 1e-4 --val-every 1000 --val-limit 256 --lovasz-weight 0.5 --actor-weight 2 --init "$OUT/continuous7.pt" --out "$OUT/corr.pt"
 bittc train --data "$DATA2" --config cpu-small-corr --stage binary --steps "$CORR2_STEPS" --seed 14 --lr 1e-4 --val-every 1000 --val-limit 256 --lovasz-weight 0.5 --actor-weight 2 --lr-mult segnet.corr_=10 --init "$OUT/corr.pt" --out "$OUT/corr2.pt"
-bittc train --data "$DATA2" --config cpu-small-corr --stage continuous --freeze-binary --steps "$CONT_CORR_STEPS" --seed 0 --lr 2e-4 --val-every 125 --init "$OUT/corr2.pt" --out "$OUT/continuous_corr.pt"
+bittc train --data "$DATA2" --config cpu-small-corr --stage binary --steps "$CORR3_STEPS" --seed 15 --lr 1e-4 --val-every 1000 --val-limit 256 --lovasz-weight 0.5 --actor-weight 2 --lr-mult segnet.corr_=10 --init "$OUT/corr2.pt" --out "$OUT/corr3.pt"
+bittc train --data "$DATA2" --config cpu-small-corr --stage continuous --freeze-binary --steps "$CONT_CORR_STEPS" --seed 0 --lr 2e-4 --val-every 125 --init "$OUT/corr3.pt" --out "$OUT/continuous_corr.pt"
 # ship the continuous stage's best checkpoint (by val MiD; the binary part is the same in all)
 python -c "import sys; from bittc_core.checkpoint import load_checkpoint, release_payload, save_checkpoint
 save_checkpoint(sys.argv[2], release_payload(load_checkpoint(sys.argv[1], map_location='cpu')))" \
