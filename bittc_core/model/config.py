@@ -131,7 +131,7 @@ class ModelConfig:
 #: starting at zero, trained from a ``cpu-small`` checkpoint (README: what it measured).
 #: ``cpu-small-corr-gc``: ``cpu-small-corr`` plus the global-context block (an
 #: experiment: trained from a ``cpu-small-corr`` checkpoint with both added parts at a
-#: raised learning rate, ``--lr-mult``; README: what it measured).
+#: raised learning rate, ``--lr-mult``; README: one run, the block stayed unused).
 #: ``tiny``: unit tests only.
 _CPU_SMALL = ModelConfig(
     stem_channels=16,
