@@ -166,9 +166,9 @@ class MetricAccumulator:
             # eta <= 0 (behind the camera) or nan: never near a threshold, margin inf
             margin = np.where(np.isfinite(log_eta), np.abs(log_eta - np.log(eta_i)), np.inf)
             wrong = (pred[i] != truth) & valid
-            group = np.searchsorted(MARGIN_EDGES, margin, side="right")
-            self._margin[0] += np.bincount(group[wrong], minlength=len(MARGIN_EDGES) + 1)
-            self._margin[1] += np.bincount(group[valid], minlength=len(MARGIN_EDGES) + 1)
+            margin_group = np.searchsorted(MARGIN_EDGES, margin, side="right")
+            self._margin[0] += np.bincount(margin_group[wrong], minlength=len(MARGIN_EDGES) + 1)
+            self._margin[1] += np.bincount(margin_group[valid], minlength=len(MARGIN_EDGES) + 1)
             for j, m in enumerate(FORGIVEN_MARGINS):
                 forgiven[j, i] = two_class_iou(class_counts(np.where(margin < m, truth, pred[i]), truth, valid))
             if np.isfinite(ious[-1]):
