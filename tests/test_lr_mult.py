@@ -85,7 +85,6 @@ def test_the_training_loop_sets_each_groups_rate(tmp_path):
     assert rates[1.0] == pytest.approx(tr.lr_at(0))
 
 
-
 def test_a_run_saved_before_multipliers_existed_resumes(tmp_path):
     """Resumable checkpoints written before ``lr_mults`` hold optimizer groups without an
     ``lr_mult``: they resume at 1x."""

@@ -128,7 +128,7 @@ class Trainer:
                                  generator=self.loader_gen)
         for module in self.frozen_modules():
             module.requires_grad_(False)
-        self.opt = torch.optim.AdamW(param_groups(net, cfg.lr_mults), lr=cfg.lr,
+        self.opt = torch.optim.AdamW(param_groups(net, cfg.lr_mults, frozen_prefixes(cfg)), lr=cfg.lr,
                                      weight_decay=cfg.weight_decay)
         self.step = 0
         self.best = -math.inf
