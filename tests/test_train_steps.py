@@ -1,6 +1,7 @@
 """Training: a few steps lower the loss; resume restores the state; flags are validated."""
 
 import argparse
+import dataclasses
 
 import pytest
 import torch
@@ -12,7 +13,7 @@ from bittc_core.metrics import class_counts, two_class_iou
 from bittc_core.train.losses import lovasz_two_class, masked_bce
 from bittc_core.train.targets import PIXEL_THRESHOLD_JITTER, eta_labels, sample_eta_at_pixels, shift_labels
 from bittc_core.ttc import tau_to_eta
-from tests.train_helpers import fit_fixed_batch, make_trainer
+from tests.train_helpers import cli_args, fit_fixed_batch, make_trainer
 
 
 @pytest.mark.parametrize("stage, actor_weight, lovasz_weight, pixel_share",
@@ -66,6 +67,28 @@ def test_run_writes_outputs_and_resume_restores_state(tmp_path):
     wrong = make_trainer(tmp_path, "flow", steps=4)
     with pytest.raises(ValueError, match="stage 'binary', not 'flow'"):
         wrong.resume()
+
+
+def test_keep_checkpoints_keeps_the_weights_of_every_validation(tmp_path):
+    from bittc_core.checkpoint import load_checkpoint
+
+    tr = make_trainer(tmp_path, "binary", steps=4, keep_checkpoints=True)
+    tr.cfg = dataclasses.replace(tr.cfg, val_every=2)
+    tr.run()
+    kept = sorted(p.name for p in tmp_path.glob("m.binary.step*.pt"))
+    assert kept == ["m.binary.step000002.pt", "m.binary.step000004.pt"]
+    last = load_checkpoint(tmp_path / "m.binary.step000004.pt")
+    assert last["train_meta"]["step"] == 4 and "train_state" not in last
+    for k, v in tr.net.state_dict().items():  # the network as it ended
+        assert torch.equal(last["state_dict"][k], v), k
+    first = load_checkpoint(tmp_path / "m.binary.step000002.pt")
+    assert any(not torch.equal(first["state_dict"][k], v) for k, v in last["state_dict"].items())
+    cli = tmp_path / "cli"
+    assert train_cmd.run(cli_args(cli, "--keep-checkpoints")) == 0  # the flag reaches the trainer
+    assert [p.name for p in cli.glob("*.step*.pt")] == ["m.binary.step000002.pt"]
+    plain = make_trainer(tmp_path / "plain", "binary", steps=2)
+    plain.run()
+    assert not list((tmp_path / "plain").glob("*.step*.pt"))
 
 
 def test_resume_drops_the_log_rows_it_will_redo(tmp_path):

@@ -1,7 +1,8 @@
 """`bittc train --data DIR --config NAME --out CKPT`: train the Binary-TTC network.
 
 Writes beside CKPT: CKPT (best by val mIoU), <stem>.last.pt (resumable), <stem>.csv
-(log) and <stem>.config.yaml (resolved config). ``--stage all`` runs flow, binary and
+(log), <stem>.config.yaml (resolved config) and, with --keep-checkpoints, the weights of
+every validation step as <stem>.<stage>.step<NNNNNN>.pt. ``--stage all`` runs flow, binary and
 continuous in turn, ``--steps`` each, weights carried over.
 """
 
@@ -24,7 +25,7 @@ def add_parser(sub) -> argparse.ArgumentParser:
     p = sub.add_parser("train", help="train the Binary-TTC network",
                        description=__doc__.split("\n\n", 1)[1])
     p.add_argument("--data", required=True, help="dataset folder, or 'synthetic' for the built-in generator")
-    p.add_argument("--config", required=True, help="model config name (paper, cpu-small, cpu-small-gc, cpu-medium, cpu-small-corr, tiny)")
+    p.add_argument("--config", required=True, help="model config name (paper, cpu-small, cpu-small-gc, cpu-medium, cpu-small-corr, cpu-small-corr-gc, tiny)")
     p.add_argument("--out", required=True, help="best checkpoint path, *.pt")
     p.add_argument("--resume", action="store_true", help="continue from <stem>.last.pt")
     p.add_argument("--init", default=None, help="start from the weights of this checkpoint (same config, or a config "
@@ -38,6 +39,9 @@ def add_parser(sub) -> argparse.ArgumentParser:
                    help="linear warm-up steps before the cosine decay, per stage (default 200)")
     p.add_argument("--val-every", type=int, default=250, help="steps between validations")
     p.add_argument("--val-limit", type=int, default=64, help="validation pairs")
+    p.add_argument("--keep-checkpoints", action="store_true",
+                   help="also keep the weights of every validation step, <stem>.<stage>.step<NNNNNN>.pt beside --out "
+                        "(for weight averaging: docs/average_weights.py)")
     add_device_flag(p)
     p.add_argument("--stage", default="binary", help="flow, binary, continuous or all (default binary)")
     p.add_argument("--actor-weight", type=float, default=1.0,
@@ -209,7 +213,7 @@ def run(args) -> int:
                        val_every=args.val_every, val_limit=args.val_limit, seed=args.seed,
                        actor_weight=args.actor_weight, lovasz_weight=args.lovasz_weight,
                        distill_weight=distill_weight, pixel_threshold_share=args.pixel_thresholds,
-                       lr_mults=lr_mults)
+                       lr_mults=lr_mults, keep_checkpoints=args.keep_checkpoints)
     stage_cfgs = {stage: dataclasses.replace(base, stage=stage,
                                              freeze_binary=args.freeze_binary and stage == "continuous")
                   for stage in stages}

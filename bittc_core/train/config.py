@@ -43,6 +43,9 @@ class TrainConfig:
     # would otherwise stay small beside weights trained for thousands of steps
     lr_mults: tuple[tuple[str, float], ...] = ()
     val_every: int = 250  # steps between validations (and checkpoints)
+    # also keep the weights of every validation step (``RunPaths.snapshot``), e.g. to
+    # average the tail of a run (``docs/average_weights.py``)
+    keep_checkpoints: bool = False
     val_limit: int = 64  # validation pairs
     log_every: int = 10  # steps between CSV rows
     num_workers: int = 0  # DataLoader workers

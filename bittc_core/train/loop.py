@@ -12,8 +12,9 @@ refined log eta (0.9), still with the flow auxiliary (0.8 / 0.2); with
 AdamW, linear warm-up then cosine decay, gradient clipping; validation every
 ``val_every`` steps keeps the best checkpoint by val mIoU (by val MiD with
 ``freeze_binary``) at ``paths.best``; a
-resumable checkpoint (optimizer, step, RNG states) goes to ``paths.last``; a CSV row
-every ``log_every`` steps to ``paths.csv``.
+resumable checkpoint (optimizer, step, RNG states) goes to ``paths.last``, with
+``keep_checkpoints`` the weights of every validation step to ``paths.snapshot``; a CSV
+row every ``log_every`` steps to ``paths.csv``.
 """
 
 from __future__ import annotations
@@ -60,6 +61,11 @@ class RunPaths:
         stem = out.with_suffix("")
         return cls(best=out, last=stem.with_name(stem.name + ".last.pt"),
                    csv=stem.with_suffix(".csv"), config=stem.with_name(stem.name + ".config.yaml"))
+
+    def snapshot(self, stage: str, step: int) -> Path:
+        """Where ``keep_checkpoints`` puts the weights of ``stage`` at ``step``."""
+        stem = self.best.with_suffix("")
+        return stem.with_name(f"{stem.name}.{stage}.step{step:06d}.pt")
 
 
 def _forever(loader: DataLoader, epoch: int = 0):
@@ -311,10 +317,12 @@ class Trainer:
                 self._train_mode()
                 row = dict(row or {"step": self.step, "stage": c.stage}, **{k: f"{v:.5f}" for k, v in last_val.items()})
                 score = self.score(last_val)
+                weights = make_payload(self.net, self.config_name, self._meta(last_val))
                 if score > self.best:
                     self.best = score
-                    save_checkpoint(self.paths.best, make_payload(self.net, self.config_name,
-                                                                  self._meta(last_val)))
+                    save_checkpoint(self.paths.best, weights)
+                if c.keep_checkpoints:
+                    save_checkpoint(self.paths.snapshot(c.stage, self.step), weights)
                 self.save_last()
             if row is not None:
                 self._log(row)
