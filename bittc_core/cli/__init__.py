@@ -24,6 +24,7 @@ COMMANDS: dict[str, str] = {
     "train": "bittc_core.cli.train_cmd",
     "eval": "bittc_core.cli.eval_cmd",
     "bench": "bittc_core.cli.bench_cmd",
+    "predict": "bittc_core.cli.predict_cmd",
 }
 
 

@@ -1,0 +1,92 @@
+"""`bittc predict`: the maps of one pair of image files, and bad input refused before writing."""
+
+import json
+
+import cv2
+import numpy as np
+import pytest
+
+from bittc_core.cli import main
+from bittc_core.cli.predict_cmd import OUTPUT_FILES, geofence_overlay
+from bittc_core.estimator import make_estimator
+
+
+@pytest.fixture(scope="module")
+def pair(tmp_path_factory):
+    """A smooth random texture and the same texture zoomed 1.1x about the centre (an
+    approaching wall: eta = 1/1.1, tau = 1 s at 10 Hz), as PNG files."""
+    d = tmp_path_factory.mktemp("pair")
+    rng = np.random.default_rng(0)
+    prev = cv2.GaussianBlur(rng.integers(0, 256, (96, 288, 3)).astype(np.uint8), (0, 0), 1.5)
+    zoom = cv2.getRotationMatrix2D(((288 - 1) / 2, (96 - 1) / 2), 0.0, 1.1)
+    latest = cv2.warpAffine(prev, zoom, (288, 96), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REFLECT)
+    for name, img in (("prev.png", prev), ("latest.png", latest)):
+        cv2.imwrite(str(d / name), img)
+    cv2.imwrite(str(d / "small.png"), prev[:48])
+    (d / "text.png").write_text("not an image")
+    return d
+
+
+def test_predict_writes_the_maps_of_the_estimator(pair, tmp_path, capsys):
+    out = tmp_path / "pred"
+    argv = ["predict", str(pair / "prev.png"), str(pair / "latest.png"), "--out", str(out), "--tau", "2", "0.5", "1"]
+    assert main(argv) == 0
+    assert sorted(p.name for p in out.iterdir()) == sorted(OUTPUT_FILES)  # no temporary left
+    z = np.load(out / "prediction.npz")
+    assert z["geofence"].shape == (3, 96, 288) and z["geofence"].dtype == np.float32
+    assert z["thresholds_s"].tolist() == [2.0, 0.5, 1.0]
+    # the same as the estimator on the same RGB frames (files are BGR on disk)
+    rgb = [cv2.cvtColor(cv2.imread(str(pair / n)), cv2.COLOR_BGR2RGB) for n in ("prev.png", "latest.png")]
+    est = make_estimator("bittc")
+    np.testing.assert_allclose(z["geofence"], est.geofence(*rgb, [2.0, 0.5, 1.0]), atol=1e-5)
+    np.testing.assert_allclose(z["eta"], est.motion_in_depth(*rgb), atol=1e-5)
+    assert np.array_equal(z["quantized"], est.quantized(*rgb, [0.5, 1.0, 2.0]))  # bins over sorted thresholds
+    eta = z["eta"]
+    np.testing.assert_allclose(z["ttc_s"][eta < 1], (0.1 * eta / (1 - eta))[eta < 1], rtol=1e-4)
+    s = json.loads((out / "prediction.json").read_text())
+    assert s["thresholds_s"] == [2.0, 0.5, 1.0] and s["size_hw"] == [96, 288] and s["frame_dt_s"] == 0.1
+    assert s["inside_share"] == [round(float((g > 0.5).mean()), 6) for g in z["geofence"]]
+    assert set(s["wall_ms"]) == {"geofence", "continuous"}
+    png = cv2.imread(str(out / "geofence.png"))
+    assert png.shape == (96, 288, 3)
+    assert "tau <= 0.5 s" in capsys.readouterr().out
+
+
+def test_predict_resizes_and_runs_the_flow_baseline(pair, tmp_path):
+    out = tmp_path / "flow"
+    assert main(["predict", str(pair / "prev.png"), str(pair / "latest.png"), "--out", str(out),
+                 "--method", "flow", "--size", "48x144", "--tau", "1"]) == 0
+    z = np.load(out / "prediction.npz")
+    assert z["geofence"].shape == (1, 48, 144)
+    # the whole frame approaches at tau = 1 s: the baseline puts the inner image inside 1.5 s
+    assert main(["predict", str(pair / "prev.png"), str(pair / "latest.png"), "--out", str(out),
+                 "--method", "flow", "--tau", "1.5"]) == 0
+    inner = np.load(out / "prediction.npz")["geofence"][0, 24:72, 72:216]
+    assert (inner > 0.5).mean() > 0.8
+
+
+def test_geofence_overlay_paints_the_shortest_threshold_on_top():
+    img = np.zeros((2, 2, 3), np.uint8)
+    g = np.zeros((2, 2, 2), np.float32)
+    g[0] = 1.0  # tau 1 s: everything
+    g[1, 0, 0] = 1.0  # tau 0.5 s: one pixel
+    out = geofence_overlay(img, g, np.array([1.0, 0.5]), alpha=1.0)
+    assert out[0, 0].tolist() == [255, 0, 0] and out[1, 1].tolist() == [255, 220, 0]
+
+
+@pytest.mark.parametrize("files, extra, needle", [
+    (("missing.png", "latest.png"), [], "PREV"),
+    (("prev.png", "text.png"), [], "not an image"),
+    (("small.png", "latest.png"), [], "the same size"),
+    (("prev.png", "latest.png"), ["--tau", "0.05"], "0.05 s outside the trained range"),
+    (("prev.png", "latest.png"), ["--tau", "1", "1"], "given twice"),
+    (("prev.png", "latest.png"), ["--size", "95x288"], "multiples of 3"),
+    (("prev.png", "latest.png"), ["--method", "oracle"], "--method 'oracle'"),
+    (("prev.png", "latest.png"), ["--method", "flow", "--tta", "flip"], "--method bittc"),
+    (("prev.png", "latest.png"), ["--tta", "both"], "tta='both'"),
+])
+def test_predict_bad_input_exits_2_and_writes_nothing(pair, tmp_path, capsys, files, extra, needle):
+    out = tmp_path / "o"
+    assert main(["predict", *(str(pair / f) for f in files), "--out", str(out), *extra]) == 2
+    assert needle in capsys.readouterr().err
+    assert not out.exists() or not any(out.iterdir())
