@@ -11,6 +11,13 @@ Ground styles (``TextureBank(ground=...)``):
     about 0.4 m of road per image row, at 5 m about 0.1 m.
     ``"smooth"``: the textures of dataset version bittc_v1 (most energy at 5 m scale;
     the ground looks nearly uniform, so its motion is hard to measure).
+
+Vehicle styles (``TextureBank(vehicles=...)``):
+    ``"detailed"`` (default): paint and glass also carry mid-frequency shading (dirt,
+    reflections) and anti-aliased spots 4-17 cm across on a 1.8 m car face, so a
+    vehicle's own scale change can be measured inside its outline, not only at its edges.
+    ``"plain"``: the vehicles of dataset versions bittc_v1 and bittc_v2 (panel shading,
+    a dark window band, lamps; large faces nearly uniform).
 """
 
 from __future__ import annotations
@@ -26,6 +33,8 @@ TEXTURE_SIZE_PX = 128
 
 GROUND_TEXTURE_SIZE_PX = 256  # a 20 m road tile: 8 cm per texel along the road
 GROUND_STYLES = ("detailed", "smooth")
+VEHICLE_STYLES = ("detailed", "plain")
+VEHICLE_KINDS = ("paint", "glass")  # the kinds a vehicle style changes
 
 
 def smooth_noise(rng: np.random.Generator, size_px: int = TEXTURE_SIZE_PX, octaves: int = 5,
@@ -97,6 +106,16 @@ def vehicle_paint(rng: np.random.Generator, rgb: tuple[float, float, float]) -> 
     return np.clip(img, 0, 255).astype(np.uint8)
 
 
+def vehicle_detail(rng: np.random.Generator, img: np.ndarray, noise_contrast: float, spot_contrast: float,
+                   spots: int = 30) -> np.ndarray:  # fmt: skip
+    """A vehicle texture (uint8) with mid-frequency shading (cells of 1/8 to 1/32 of the
+    face) and ``spots`` anti-aliased spots 2-8 texels in radius multiplied in."""
+    s = img.shape[0]
+    n = smooth_noise(rng, s, octaves=3, first_cells=8, decay=0.8) - 0.5
+    shade = 1.0 + noise_contrast * n + spot_contrast * patches(rng, s, spots, (2.0, 8.0))
+    return np.clip(img.astype(np.float32) * shade[..., None], 0, 255).astype(np.uint8)
+
+
 def facade(rng: np.random.Generator) -> np.ndarray:
     """Building facade: wall colour with a grid of darker windows."""
     wall = tuple(rng.uniform(0.35, 0.85, 3))
@@ -139,11 +158,14 @@ class TextureBank:
     fresh textures, which keeps building a world cheap when many are built in a row.
     """
 
-    def __init__(self, seed: int, directory: Path, ground: str = "detailed"):
+    def __init__(self, seed: int, directory: Path, ground: str = "detailed", vehicles: str = "detailed"):
         if ground not in GROUND_STYLES:
             raise ValueError(f"ground texture style {ground!r}: must be one of {GROUND_STYLES}")
+        if vehicles not in VEHICLE_STYLES:
+            raise ValueError(f"vehicle texture style {vehicles!r}: must be one of {VEHICLE_STYLES}")
         self.seed = seed
         self.ground = ground
+        self.vehicles = vehicles
         self.dir = Path(directory)
         self.dir.mkdir(parents=True, exist_ok=True)
 
@@ -151,10 +173,13 @@ class TextureBank:
         if kind not in TEXTURE_KINDS:
             raise ValueError(f"unknown texture kind {kind!r}")
         variant %= VARIANTS
-        p = self.dir / f"{self.ground}_{kind}_{palette_index}_{variant}.png"
+        style = self.vehicles if kind in VEHICLE_KINDS else self.ground
+        p = self.dir / f"{style}_{kind}_{palette_index}_{variant}.png"
         if not p.exists():
             rng = np.random.default_rng([self.seed, TEXTURE_KINDS.index(kind), palette_index, variant])
             img = _draw(kind, rng, palette_index, self.ground)
+            if style == "detailed" and kind in VEHICLE_KINDS:  # drawn after the plain one: same base
+                img = vehicle_detail(rng, img, *((0.5, 0.35) if kind == "paint" else (0.8, 0.5)))
             tmp = p.with_name(f".{p.name}.{os.getpid()}.tmp.png")
             cv2.imwrite(str(tmp), cv2.cvtColor(img, cv2.COLOR_RGB2BGR))
             os.replace(tmp, p)

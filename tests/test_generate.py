@@ -123,6 +123,7 @@ def test_dataset_tensors_have_documented_shapes_and_flip_consistently(tmp_path):
         (["--samples", "2", "--seed", "1", "--workers", "0"], "--workers 0"),
         (["--samples", "2", "--seed", "1", "--clip-length", "1"], "--clip-length 1"),
         (["--samples", "2", "--seed", "1", "--ground-texture", "gravel"], "--ground-texture 'gravel'"),
+        (["--samples", "2", "--seed", "1", "--vehicle-texture", "chrome"], "--vehicle-texture 'chrome'"),
     ],
 )
 def test_bad_generate_flags(tmp_path, capsys, argv, needle):
@@ -154,6 +155,19 @@ def test_datasets_made_before_the_ground_option_count_as_smooth(tmp_path, capsys
     assert main(common) == 2  # the default is now the detailed ground
     assert "ground_texture = 'smooth'" in capsys.readouterr().err
     assert main([*common, "--ground-texture", "smooth"]) == 0
+    assert (ds / "train" / "000001" / "meta.json").exists()
+
+
+def test_datasets_made_before_the_vehicle_option_count_as_plain(tmp_path, capsys):
+    ds = tmp_path / "ds"
+    old = GenerationConfig(seed=3, height_px=48, width_px=144, vehicle_texture="plain")
+    generate(ds, old, "train", 1, workers=1, backend="local", progress=False)
+    gen = ds / "generation.yaml"
+    gen.write_text("".join(line for line in gen.read_text().splitlines(True) if not line.startswith("vehicle_texture")))
+    common = ["generate", "--out", str(ds), "--samples", "2", "--seed", "3", "--size", "48x144", "--no-progress"]
+    assert main(common) == 2  # the default is now the detailed vehicles
+    assert "vehicle_texture = 'plain'" in capsys.readouterr().err
+    assert main([*common, "--vehicle-texture", "plain"]) == 0
     assert (ds / "train" / "000001" / "meta.json").exists()
 
 

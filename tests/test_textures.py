@@ -5,7 +5,7 @@ import cv2
 import numpy as np
 import pytest
 
-from sim.textures import TEXTURE_KINDS, TextureBank
+from sim.textures import TEXTURE_KINDS, VEHICLE_KINDS, TextureBank
 
 
 def _read(path) -> np.ndarray:
@@ -42,3 +42,29 @@ def test_ground_style_touches_only_the_ground_and_is_seeded(tmp_path):
 def test_unknown_ground_style_is_refused(tmp_path):
     with pytest.raises(ValueError, match="'gravel'"):
         TextureBank(0, tmp_path, ground="gravel")
+
+
+def test_vehicle_style_touches_only_paint_and_glass(tmp_path):
+    a, b = TextureBank(0, tmp_path / "a"), TextureBank(0, tmp_path / "b", vehicles="plain")
+    for kind in TEXTURE_KINDS:
+        same = a.path(kind, 2, 3).read_bytes() == b.path(kind, 2, 3).read_bytes()
+        assert same == (kind not in VEHICLE_KINDS), kind
+    with pytest.raises(ValueError, match="'chrome'"):
+        TextureBank(0, tmp_path, vehicles="chrome")
+
+
+@pytest.mark.parametrize("kind", VEHICLE_KINDS)
+def test_detailed_vehicles_have_structure_inside_their_faces(tmp_path, kind):
+    """Texel differences 1/16 of a face apart, away from the plain paint's window band and
+    lamps (rows 0.65-0.82 of the face): the detailed style has at least twice as much."""
+    for palette in (0, 2, 6):  # red, white, orange
+        plain = _read(TextureBank(0, tmp_path / "p", vehicles="plain").path(kind, 1, palette))
+        detailed = _read(TextureBank(0, tmp_path / "d", vehicles="detailed").path(kind, 1, palette))
+        rows = slice(int(0.65 * plain.shape[0]), int(0.82 * plain.shape[0]))
+
+        def energy(img):
+            band = img[rows]
+            step = img.shape[1] // 16
+            return float(((band[:, step:] - band[:, :-step]) ** 2).mean())
+
+        assert energy(detailed) > 2 * energy(plain), (kind, palette)

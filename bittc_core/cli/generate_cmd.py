@@ -24,6 +24,9 @@ def add_parser(sub) -> argparse.ArgumentParser:
     p.add_argument("--ground-texture", default="detailed",
                    help="road and verge textures: detailed (default; patches and broadband noise whose motion "
                         "can be measured) or smooth (as in datasets made before the option, e.g. bittc_v1)")  # fmt: skip
+    p.add_argument("--vehicle-texture", default="detailed",
+                   help="vehicle paint and glass: detailed (default; shading and spots inside the outline whose "
+                        "motion can be measured) or plain (as in datasets made before the option, e.g. bittc_v2)")  # fmt: skip
     p.add_argument("--workers", type=int, default=1)
     p.add_argument("--backend", default="local", help="local (process pool, default) or ray")
     p.add_argument("--ray-address", default=None, help="address of an existing Ray cluster (default: start a local one)")
@@ -36,7 +39,7 @@ def run(args) -> int:
 
     h, w = parse_size(args.size)
     cfg = GenerationConfig(seed=args.seed, height_px=h, width_px=w, fps_hz=args.fps, clip_length=args.clip_length, supersample=args.supersample,
-                           ground_texture=args.ground_texture)
+                           ground_texture=args.ground_texture, vehicle_texture=args.vehicle_texture)
     stats = generate(Path(args.out), cfg, args.split, args.samples, args.workers, args.backend, args.ray_address, progress=not args.no_progress)
     print(json.dumps(stats))
     return 0

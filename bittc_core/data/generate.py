@@ -24,7 +24,7 @@ import yaml
 
 from bittc_core.data.format import SPLITS, sample_dirname, sample_is_complete, write_sample
 from bittc_core.errors import CliError
-from sim.textures import GROUND_STYLES
+from sim.textures import GROUND_STYLES, VEHICLE_STYLES
 
 SPLIT_SEED_BASE = {"train": 0, "val": 1_000_000_000, "test": 2_000_000_000}
 MAX_SAMPLES_PER_SPLIT = 1_000_000_000
@@ -48,6 +48,7 @@ class GenerationConfig:
     clip_length: int = 2  # frames per sample
     supersample: int = 1  # render at this factor and average down
     ground_texture: str = "detailed"  # sim.textures.GROUND_STYLES; "smooth" = bittc_v1's ground
+    vehicle_texture: str = "detailed"  # sim.textures.VEHICLE_STYLES; "plain" = bittc_v1's and v2's vehicles
 
     def __post_init__(self) -> None:
         if self.seed < 0:
@@ -60,6 +61,8 @@ class GenerationConfig:
             raise CliError(f"--supersample {self.supersample}: must be 1, 2, 3 or 4")
         if self.ground_texture not in GROUND_STYLES:
             raise CliError(f"--ground-texture {self.ground_texture!r}: must be one of {', '.join(GROUND_STYLES)}")
+        if self.vehicle_texture not in VEHICLE_STYLES:
+            raise CliError(f"--vehicle-texture {self.vehicle_texture!r}: must be one of {', '.join(VEHICLE_STYLES)}")
 
 
 def sample_seed(split: str, index: int) -> int:
@@ -87,7 +90,7 @@ def _worker_init(cfg_dict: dict) -> None:
     _close_worker()
     cfg = GenerationConfig(**cfg_dict)
     bank_dir = Path(tempfile.mkdtemp(prefix="bittc_bank_"))
-    _WORKER.update(cfg=cfg, bank=TextureBank(cfg.seed, bank_dir, ground=cfg.ground_texture), bank_dir=bank_dir,
+    _WORKER.update(cfg=cfg, bank=TextureBank(cfg.seed, bank_dir, ground=cfg.ground_texture, vehicles=cfg.vehicle_texture), bank_dir=bank_dir,
                    camera=CameraConfig(height_px=cfg.height_px, width_px=cfg.width_px, fps_hz=cfg.fps_hz, supersample=cfg.supersample))  # fmt: skip
 
 
@@ -148,6 +151,7 @@ def prepare_dir(out: Path, cfg: GenerationConfig) -> None:
         if not isinstance(old, dict):
             raise CliError(f"{gen}: not a mapping of generation settings; remove the folder or choose another --out")
         old.setdefault("ground_texture", "smooth")  # datasets made before the option had the smooth ground
+        old.setdefault("vehicle_texture", "plain")  # and the plain vehicles
         mine = asdict(cfg)
         for k in sorted(set(old) | set(mine)):
             if old.get(k) != mine.get(k):
