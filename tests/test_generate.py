@@ -145,29 +145,18 @@ def test_foreign_or_mismatched_dir_is_refused(tmp_path, capsys):
     assert "seed = 3" in capsys.readouterr().err
 
 
-def test_datasets_made_before_the_ground_option_count_as_smooth(tmp_path, capsys):
+@pytest.mark.parametrize("key, old_value, flag", [("ground_texture", "smooth", "--ground-texture"),
+                                                  ("vehicle_texture", "plain", "--vehicle-texture")])
+def test_datasets_made_before_a_texture_option_count_as_its_old_style(tmp_path, capsys, key, old_value, flag):
     ds = tmp_path / "ds"
-    old = GenerationConfig(seed=3, height_px=48, width_px=144, ground_texture="smooth")
+    old = GenerationConfig(seed=3, height_px=48, width_px=144, **{key: old_value})
     generate(ds, old, "train", 1, workers=1, backend="local", progress=False)
     gen = ds / "generation.yaml"
-    gen.write_text("".join(line for line in gen.read_text().splitlines(True) if not line.startswith("ground_texture")))
+    gen.write_text("".join(line for line in gen.read_text().splitlines(True) if not line.startswith(key)))
     common = ["generate", "--out", str(ds), "--samples", "2", "--seed", "3", "--size", "48x144", "--no-progress"]
-    assert main(common) == 2  # the default is now the detailed ground
-    assert "ground_texture = 'smooth'" in capsys.readouterr().err
-    assert main([*common, "--ground-texture", "smooth"]) == 0
-    assert (ds / "train" / "000001" / "meta.json").exists()
-
-
-def test_datasets_made_before_the_vehicle_option_count_as_plain(tmp_path, capsys):
-    ds = tmp_path / "ds"
-    old = GenerationConfig(seed=3, height_px=48, width_px=144, vehicle_texture="plain")
-    generate(ds, old, "train", 1, workers=1, backend="local", progress=False)
-    gen = ds / "generation.yaml"
-    gen.write_text("".join(line for line in gen.read_text().splitlines(True) if not line.startswith("vehicle_texture")))
-    common = ["generate", "--out", str(ds), "--samples", "2", "--seed", "3", "--size", "48x144", "--no-progress"]
-    assert main(common) == 2  # the default is now the detailed vehicles
-    assert "vehicle_texture = 'plain'" in capsys.readouterr().err
-    assert main([*common, "--vehicle-texture", "plain"]) == 0
+    assert main(common) == 2  # the default is now the detailed style
+    assert f"{key} = {old_value!r}" in capsys.readouterr().err
+    assert main([*common, flag, old_value]) == 0
     assert (ds / "train" / "000001" / "meta.json").exists()
 
 
