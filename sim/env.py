@@ -25,7 +25,9 @@ Episode End:
 
 Ground truth (per-pixel eta/tau/flow/depth maps, per-actor gaps and TTCs, collision)
 travels in ``info``, never in the observation. The scenery seed is drawn from
-``self.np_random``, so ``reset(seed=s)`` fixes every pixel.
+``self.np_random``, so ``reset(seed=s)`` fixes every pixel. ``textures`` (a
+``sim.textures.TextureStyle``) picks the ground and vehicle texture styles, detailed by
+default.
 """
 
 from __future__ import annotations
@@ -38,6 +40,7 @@ from gymnasium import spaces
 
 from sim.camera import CameraConfig
 from sim.episode import ScenarioSim
+from sim.textures import TextureStyle
 
 MAX_DECEL_MPS2 = 9.0  # [m/s^2]
 MAX_SPEED_MPS = 60.0  # [m/s]
@@ -46,7 +49,8 @@ MAX_SPEED_MPS = 60.0  # [m/s]
 class ScenarioEnv(gym.Env):
     metadata = {"render_modes": ["rgb_array"], "render_fps": 10}
 
-    def __init__(self, scenario: str = "CCRs-50", camera: CameraConfig | None = None, render_mode: str | None = None):
+    def __init__(self, scenario: str = "CCRs-50", camera: CameraConfig | None = None, render_mode: str | None = None,
+                 textures: TextureStyle | None = None):  # fmt: skip
         import scenarios
 
         cases = scenarios.resolve(scenario)
@@ -54,6 +58,7 @@ class ScenarioEnv(gym.Env):
             raise ValueError(f"scenario {scenario!r} expands to {len(cases)} cases; name one case (e.g. {cases[0].name})")
         self.case = cases[0]
         self.camera = camera or CameraConfig()
+        self.textures = textures or TextureStyle()
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode {render_mode!r} is not supported")
         self.render_mode = render_mode
@@ -87,7 +92,7 @@ class ScenarioEnv(gym.Env):
         super().reset(seed=seed)
         self.close()
         world_seed = int(self.np_random.integers(2**31 - 1))
-        self._sim = ScenarioSim(self.case, self.camera, world_seed, render=True)
+        self._sim = ScenarioSim(self.case, self.camera, world_seed, render=True, textures=self.textures)
         truth = self._sim.reset()
         self._prev, self._frame = None, self._sim.capture()
         return self._obs(), self._info(truth)

@@ -16,6 +16,7 @@ from scenarios.spec import ActorSpec, ScenarioCase
 from sim.actor_truth import ActorTruth, actor_truth, footprint_distance
 from sim.camera import CameraConfig, cam_T_ego
 from sim.ground_truth import GroundTruth, body_motions, camera_pose, compute_ground_truth
+from sim.textures import TextureStyle
 from sim.traffic import ActuatorConfig, EgoVehicle, ScriptedVehicle, TrafficVehicle, build_road
 from sim.vehicles import EGO_SIZE_M, VehicleSpec, footprint_corners, footprints_overlap, sample_spec
 
@@ -75,11 +76,14 @@ class ScenarioSim:
         seed: draws scenery, vehicle appearance and background traffic.
         render: render camera frames and per-pixel ground truth.
         actuator: the ego's brake actuator.
+        textures: the rendered world's ground and vehicle texture styles.
     """
 
-    def __init__(self, case: ScenarioCase, camera: CameraConfig, seed: int, render: bool, actuator: ActuatorConfig | None = None):
+    def __init__(self, case: ScenarioCase, camera: CameraConfig, seed: int, render: bool, actuator: ActuatorConfig | None = None,
+                 textures: TextureStyle = TextureStyle()):  # fmt: skip
         self.case = case
         self.camera = camera
+        self.textures = textures
         self.seed = seed
         self.render_enabled = render
         self.actuator = actuator or ActuatorConfig()
@@ -110,7 +114,7 @@ class ScenarioSim:
         if self.render_enabled:
             from sim.world import World
 
-            self.world = World(self.camera, road, seed=self.seed)
+            self.world = World(self.camera, road, seed=self.seed, style=self.textures)
         self.actors: list[_Actor] = []
         for a, spec, x, y, heading in placements:
             lc = None

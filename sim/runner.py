@@ -24,6 +24,7 @@ import yaml
 from controllers.base import BrakeCommand, Controller, Observation
 from scenarios.spec import ScenarioCase
 from sim.camera import CameraConfig
+from sim.textures import TextureStyle
 from sim.episode import ScenarioSim
 from sim.traffic import ActuatorConfig
 from sim.video import VideoWriter, hud, ttc_overlay
@@ -75,12 +76,13 @@ def run_case(
     out_dir: Path | None = None,
     video: bool = False,
     actuator: ActuatorConfig | None = None,
+    textures: TextureStyle = TextureStyle(),
 ) -> dict:
     """Run ``case`` closed loop; returns the summary. With ``out_dir`` writes
     summary.json, trace.csv, config.yaml (and camera.mp4 with ``video``)."""
     wall0 = time.perf_counter()
     render = controller.needs_camera or video
-    sim = ScenarioSim(case, camera, seed, render=render, actuator=actuator)
+    sim = ScenarioSim(case, camera, seed, render=render, actuator=actuator, textures=textures)
     writer = VideoWriter(out_dir / "camera.mp4", camera.fps_hz) if (video and out_dir is not None) else None
     try:
         controller.reset()
@@ -144,7 +146,7 @@ def run_case(
             "wall_time_s": round(time.perf_counter() - wall0, 3),
         }
         if out_dir is not None:
-            _write_outputs(out_dir, case, controller, camera, seed, sim.actuator, summary, rows, video)
+            _write_outputs(out_dir, case, controller, camera, seed, sim.actuator, summary, rows, video, textures)
             if writer is not None:
                 writer.close()
         return summary
@@ -194,7 +196,7 @@ def _video_frame(image: np.ndarray, truth, active: BrakeCommand, sim: ScenarioSi
     return hud(img, lines, active.warning or active.decel_mps2 > 0)
 
 
-def _write_outputs(out_dir: Path, case, controller, camera, seed, actuator, summary, rows, video) -> None:
+def _write_outputs(out_dir: Path, case, controller, camera, seed, actuator, summary, rows, video, textures) -> None:
     out_dir.mkdir(parents=True, exist_ok=True)
     buf = io.StringIO()
     fieldnames = list(rows[0].keys()) if rows else ["t_s"]
@@ -210,6 +212,7 @@ def _write_outputs(out_dir: Path, case, controller, camera, seed, actuator, summ
         "controller": controller.name,
         "seed": seed,
         "camera": asdict(camera),
+        "textures": asdict(textures),
         "actuator": asdict(actuator),
         "video": video,
     }

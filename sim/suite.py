@@ -11,6 +11,7 @@ import controllers
 from scenarios.spec import ScenarioCase
 from sim.camera import CameraConfig
 from sim.runner import SUMMARY_KEYS, atomic_write_text, run_case
+from sim.textures import TextureStyle
 
 TABLE_COLUMNS = (
     ("scenario", 28), ("threat", 6), ("collision", 9), ("impact_speed_kph", 8), ("min_gap_m", 8),
@@ -21,7 +22,7 @@ HEADERS = {"impact_speed_kph": "impact", "min_gap_m": "gap_m", "ttc_at_first_war
 
 
 def run_cases(cases: list[ScenarioCase], controller: str, camera: CameraConfig, seed: int, out_dir: Path,
-              video: bool = False, progress: bool = True) -> list[dict]:  # fmt: skip
+              video: bool = False, progress: bool = True, textures: TextureStyle = TextureStyle()) -> list[dict]:  # fmt: skip
     """Run every case into ``out_dir/<case>/`` and write ``out_dir/summary.{csv,json}``."""
     summaries = []
     it = cases
@@ -30,7 +31,8 @@ def run_cases(cases: list[ScenarioCase], controller: str, camera: CameraConfig, 
 
         it = tqdm(cases, desc=f"{controller}", unit="run", leave=False)
     for case in it:
-        summaries.append(run_case(case, controllers.make(controller), camera, seed, out_dir / case.name, video=video))
+        summaries.append(run_case(case, controllers.make(controller), camera, seed, out_dir / case.name, video=video,
+                                  textures=textures))
     write_table(out_dir, summaries)
     return summaries
 

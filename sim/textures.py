@@ -23,6 +23,7 @@ Vehicle styles (``TextureBank(vehicles=...)``):
 from __future__ import annotations
 
 import os
+from dataclasses import dataclass
 from pathlib import Path
 
 import cv2
@@ -35,6 +36,20 @@ GROUND_TEXTURE_SIZE_PX = 256  # a 20 m road tile: 8 cm per texel along the road
 GROUND_STYLES = ("detailed", "smooth")
 VEHICLE_STYLES = ("detailed", "plain")
 VEHICLE_KINDS = ("paint", "glass")  # the kinds a vehicle style changes
+
+
+@dataclass(frozen=True)
+class TextureStyle:
+    """How a world looks: the ground style and the vehicle style (see the module doc)."""
+
+    ground: str = "detailed"  # GROUND_STYLES
+    vehicles: str = "detailed"  # VEHICLE_STYLES
+
+    def __post_init__(self) -> None:
+        if self.ground not in GROUND_STYLES:
+            raise ValueError(f"ground texture style {self.ground!r}: must be one of {GROUND_STYLES}")
+        if self.vehicles not in VEHICLE_STYLES:
+            raise ValueError(f"vehicle texture style {self.vehicles!r}: must be one of {VEHICLE_STYLES}")
 
 
 def smooth_noise(rng: np.random.Generator, size_px: int = TEXTURE_SIZE_PX, octaves: int = 5,
@@ -159,10 +174,7 @@ class TextureBank:
     """
 
     def __init__(self, seed: int, directory: Path, ground: str = "detailed", vehicles: str = "detailed"):
-        if ground not in GROUND_STYLES:
-            raise ValueError(f"ground texture style {ground!r}: must be one of {GROUND_STYLES}")
-        if vehicles not in VEHICLE_STYLES:
-            raise ValueError(f"vehicle texture style {vehicles!r}: must be one of {VEHICLE_STYLES}")
+        TextureStyle(ground, vehicles)  # validates both
         self.seed = seed
         self.ground = ground
         self.vehicles = vehicles

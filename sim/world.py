@@ -69,13 +69,14 @@ class World:
         light_direction: direction *towards* the light in the world frame; drawn from
             ``seed`` when None.
         bank: procedural textures to use; a private bank seeded with ``seed`` when None.
+        style: the texture styles of that private bank (ignored with ``bank``).
     """
 
     def __init__(self, camera: CameraConfig, road: RoadConfig, seed: int, light_direction: tuple[float, float, float] | None = None,
-                 bank: textures.TextureBank | None = None):  # fmt: skip
+                 bank: textures.TextureBank | None = None, style: textures.TextureStyle = textures.TextureStyle()):  # fmt: skip
         self._client: bullet_client.BulletClient | None = None
         self._tmp = Path(tempfile.mkdtemp(prefix="bittc_world_"))
-        self.bank = bank if bank is not None else textures.TextureBank(seed, self._tmp)
+        self.bank = bank if bank is not None else textures.TextureBank(seed, self._tmp, style.ground, style.vehicles)
         self._sky: dict[int, np.ndarray] = {}  # render height -> sky image
         self._scenes_on_client = 0
         self.reset(camera, road, seed, light_direction)

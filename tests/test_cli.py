@@ -39,6 +39,8 @@ def test_run_with_video(tmp_path):
         (["run", "CCRs-50", "--controller", "oracle", "--size", "96by288"], "--size"),
         (["run", "CCRs-50", "--controller", "oracle", "--seed", "-1"], "--seed -1"),
         (["run", "CCRs-50", "--controller", "oracle", "--fps", "0"], "--fps 0"),
+        (["run", "CCRs-50", "--controller", "oracle", "--vehicle-texture", "chrome"], "--vehicle-texture 'chrome'"),
+        (["suite", "--scenarios", "CCRs-50", "--ground-texture", "gravel"], "--ground-texture 'gravel'"),
     ],
 )
 def test_bad_flags_exit_2_and_write_nothing(tmp_path, capsys, argv, needle):

@@ -32,3 +32,28 @@ def test_same_seed_same_rollout_and_truth_stays_in_info():
     a, b = rollout(5), rollout(5)
     assert a[2] == b[2] == "standstill" and a[1] == b[1]
     assert all(np.array_equal(x, y) for x, y in zip(a[0], b[0]))
+
+
+def test_texture_styles_change_only_what_they_name():
+    """The same seed with plain vehicles: the same static world, other vehicle pixels;
+    with the smooth ground as well: other ground pixels too."""
+    from sim.env import ScenarioEnv
+    from sim.textures import TextureStyle
+
+    def first_frame(style):
+        env = ScenarioEnv("CCRs-10", textures=style)  # the target 14 m ahead
+        obs, info = env.reset(seed=3)
+        obs, _, _, _, info = env.step(np.zeros(1, np.float32))
+        env.close()
+        return obs["image"].astype(int), info["gt"]["instance"]
+
+    detailed, inst = first_frame(TextureStyle())
+    plain, inst_plain = first_frame(TextureStyle(vehicles="plain"))
+    assert np.array_equal(inst, inst_plain)
+    vehicle = inst > 0
+    assert vehicle.sum() > 50
+    assert np.array_equal(detailed[~vehicle], plain[~vehicle])
+    assert np.abs(detailed[vehicle] - plain[vehicle]).mean() > 3
+    smooth, _ = first_frame(TextureStyle(ground="smooth", vehicles="plain"))
+    assert np.array_equal(smooth[vehicle], plain[vehicle])
+    assert not np.array_equal(smooth[inst == 0], plain[inst == 0])

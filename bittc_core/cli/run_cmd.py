@@ -35,6 +35,20 @@ def add_camera_flags(p: argparse.ArgumentParser) -> None:
     p.add_argument("--camera-height", type=float, default=None, help="camera height above ground [m] (default 1.3)")
     p.add_argument("--jitter-deg", type=float, default=None, help="std of per-frame pitch/yaw/roll jitter [deg] (default 0)")
     p.add_argument("--supersample", type=int, default=None, help="anti-aliasing factor 1-4 (default 1)")
+    p.add_argument("--ground-texture", default="detailed",
+                   help="road and verges: detailed (default) or smooth (as in dataset bittc_v1)")
+    p.add_argument("--vehicle-texture", default="detailed",
+                   help="vehicle paint and glass: detailed (default) or plain (as in datasets bittc_v1 and bittc_v2)")
+
+
+def textures_from_args(args):
+    from sim.textures import GROUND_STYLES, VEHICLE_STYLES, TextureStyle
+
+    if args.ground_texture not in GROUND_STYLES:
+        raise CliError(f"--ground-texture {args.ground_texture!r}: must be one of {', '.join(GROUND_STYLES)}")
+    if args.vehicle_texture not in VEHICLE_STYLES:
+        raise CliError(f"--vehicle-texture {args.vehicle_texture!r}: must be one of {', '.join(VEHICLE_STYLES)}")
+    return TextureStyle(args.ground_texture, args.vehicle_texture)
 
 
 def camera_from_args(args) -> CameraConfig:
@@ -61,13 +75,15 @@ def run(args) -> int:
 
     non_negative_int("--seed", args.seed, MAX_SEED)
     camera = camera_from_args(args)
+    textures = textures_from_args(args)
     cases = scenarios.resolve(args.scenario)
     out = writable_dir(args.out)
     if len(cases) == 1:
-        s = run_case(cases[0], controllers.make(args.controller), camera, args.seed, out, video=args.video)
+        s = run_case(cases[0], controllers.make(args.controller), camera, args.seed, out, video=args.video,
+                     textures=textures)
         print(json.dumps({k: v for k, v in s.items()}, indent=2))
     else:
-        summaries = run_cases(cases, args.controller, camera, args.seed, out, video=args.video)
+        summaries = run_cases(cases, args.controller, camera, args.seed, out, video=args.video, textures=textures)
         print(format_table(summaries))
     print(f"wrote {Path(out)}")
     return 0

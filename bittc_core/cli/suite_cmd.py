@@ -7,7 +7,7 @@ import argparse
 import controllers
 import scenarios
 from bittc_core.cli.common import MAX_SEED, non_negative_int, writable_dir
-from bittc_core.cli.run_cmd import add_camera_flags, camera_from_args
+from bittc_core.cli.run_cmd import add_camera_flags, camera_from_args, textures_from_args
 
 
 def add_parser(sub) -> argparse.ArgumentParser:
@@ -28,12 +28,13 @@ def run(args) -> int:
 
     non_negative_int("--seed", args.seed, MAX_SEED)
     camera = camera_from_args(args)
+    textures = textures_from_args(args)
     if args.scenarios:
         cases = [c for name in args.scenarios.split(",") for c in scenarios.resolve(name.strip())]
     else:
         cases = list(scenarios.bundled().cases.values())
     out = writable_dir(args.out)
-    summaries = run_cases(cases, args.controller, camera, args.seed, out, video=args.video)
+    summaries = run_cases(cases, args.controller, camera, args.seed, out, video=args.video, textures=textures)
     print(format_table(summaries))
     print(f"wrote {out}/summary.csv")
     return 0
