@@ -14,7 +14,7 @@ Ground styles (``TextureBank(ground=...)``):
 
 Vehicle styles (``TextureBank(vehicles=...)``):
     ``"detailed"`` (default): paint and glass also carry mid-frequency shading (dirt,
-    reflections) and anti-aliased spots 4-17 cm across on a 1.8 m car face, so a
+    reflections) and anti-aliased spots 6-22 cm across on a 1.8 m car face, so a
     vehicle's own scale change can be measured inside its outline, not only at its edges.
     ``"plain"``: the vehicles of dataset versions bittc_v1 and bittc_v2 (panel shading,
     a dark window band, lamps; large faces nearly uniform).
