@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # Reproduce the shipped weights bittc_core/weights/bittc_default.pt on a CPU (or a GPU
 # with --device cuda appended to each train command).
-#   1. data:  bittc generate --out data/bittc_v1 --ground-texture smooth --vehicle-texture plain --split {val,test,train} ...
-#             bittc generate --out data/bittc_v2 --vehicle-texture plain --split {val,test,train} ...   (see README)
+#   1. data:  bittc generate --out data/bittc_v1 --ground-texture smooth --split {val,test,train} ...
+#             bittc generate --out data/bittc_v2 --split {val,test,train} ...   (see README)
 #   2. this:  bash docs/train_default_weights.sh data/bittc_v1 data/bittc_v2 runs/default
 # Stages as in the paper: binary-flow pre-training, binary TTC with binary flow as the
 # auxiliary task (0.8 / 0.2; run four times, each run restarting the learning-rate

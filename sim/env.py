@@ -26,8 +26,8 @@ Episode End:
 Ground truth (per-pixel eta/tau/flow/depth maps, per-actor gaps and TTCs, collision)
 travels in ``info``, never in the observation. The scenery seed is drawn from
 ``self.np_random``, so ``reset(seed=s)`` fixes every pixel. ``textures`` (a
-``sim.textures.TextureStyle``) picks the ground and vehicle texture styles, detailed by
-default.
+``sim.textures.TextureStyle``) picks the ground and vehicle texture styles (detailed
+ground and plain vehicles by default).
 """
 
 from __future__ import annotations

@@ -35,8 +35,8 @@ def test_same_seed_same_rollout_and_truth_stays_in_info():
 
 
 def test_texture_styles_change_only_what_they_name():
-    """The same seed with plain vehicles: the same static world, other vehicle pixels;
-    with the smooth ground as well: other ground pixels too."""
+    """The same seed with detailed vehicles: the same static world, other vehicle pixels;
+    with the smooth ground: other ground pixels, the same vehicle pixels."""
     from sim.env import ScenarioEnv
     from sim.textures import TextureStyle
 
@@ -47,13 +47,13 @@ def test_texture_styles_change_only_what_they_name():
         env.close()
         return obs["image"].astype(int), info["gt"]["instance"]
 
-    detailed, inst = first_frame(TextureStyle())
-    plain, inst_plain = first_frame(TextureStyle(vehicles="plain"))
+    detailed, inst = first_frame(TextureStyle(vehicles="detailed"))
+    plain, inst_plain = first_frame(TextureStyle())  # plain vehicles by default
     assert np.array_equal(inst, inst_plain)
     vehicle = inst > 0
     assert vehicle.sum() > 50
     assert np.array_equal(detailed[~vehicle], plain[~vehicle])
     assert np.abs(detailed[vehicle] - plain[vehicle]).mean() > 3
-    smooth, _ = first_frame(TextureStyle(ground="smooth", vehicles="plain"))
+    smooth, _ = first_frame(TextureStyle(ground="smooth"))
     assert np.array_equal(smooth[vehicle], plain[vehicle])
     assert not np.array_equal(smooth[inst == 0], plain[inst == 0])

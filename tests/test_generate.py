@@ -145,16 +145,16 @@ def test_foreign_or_mismatched_dir_is_refused(tmp_path, capsys):
     assert "seed = 3" in capsys.readouterr().err
 
 
-@pytest.mark.parametrize("key, old_value, flag", [("ground_texture", "smooth", "--ground-texture"),
-                                                  ("vehicle_texture", "plain", "--vehicle-texture")])
-def test_datasets_made_before_a_texture_option_count_as_its_old_style(tmp_path, capsys, key, old_value, flag):
+@pytest.mark.parametrize("key, old_value, flag, other", [("ground_texture", "smooth", "--ground-texture", "detailed"),
+                                                         ("vehicle_texture", "plain", "--vehicle-texture", "detailed")])
+def test_datasets_made_before_a_texture_option_count_as_its_old_style(tmp_path, capsys, key, old_value, flag, other):
     ds = tmp_path / "ds"
     old = GenerationConfig(seed=3, height_px=48, width_px=144, **{key: old_value})
     generate(ds, old, "train", 1, workers=1, backend="local", progress=False)
     gen = ds / "generation.yaml"
     gen.write_text("".join(line for line in gen.read_text().splitlines(True) if not line.startswith(key)))
     common = ["generate", "--out", str(ds), "--samples", "2", "--seed", "3", "--size", "48x144", "--no-progress"]
-    assert main(common) == 2  # the default is now the detailed style
+    assert main([*common, flag, other]) == 2
     assert f"{key} = {old_value!r}" in capsys.readouterr().err
     assert main([*common, flag, old_value]) == 0
     assert (ds / "train" / "000001" / "meta.json").exists()

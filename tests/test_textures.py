@@ -45,7 +45,7 @@ def test_unknown_ground_style_is_refused(tmp_path):
 
 
 def test_vehicle_style_touches_only_paint_and_glass(tmp_path):
-    a, b = TextureBank(0, tmp_path / "a"), TextureBank(0, tmp_path / "b", vehicles="plain")
+    a, b = TextureBank(0, tmp_path / "a", vehicles="detailed"), TextureBank(0, tmp_path / "b")  # plain by default
     for kind in TEXTURE_KINDS:
         same = a.path(kind, 2, 3).read_bytes() == b.path(kind, 2, 3).read_bytes()
         assert same == (kind not in VEHICLE_KINDS), kind

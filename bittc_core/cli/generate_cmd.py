@@ -24,9 +24,9 @@ def add_parser(sub) -> argparse.ArgumentParser:
     p.add_argument("--ground-texture", default="detailed",
                    help="road and verge textures: detailed (default; patches and broadband noise whose motion "
                         "can be measured) or smooth (as in datasets made before the option, e.g. bittc_v1)")  # fmt: skip
-    p.add_argument("--vehicle-texture", default="detailed",
-                   help="vehicle paint and glass: detailed (default; shading and spots inside the outline whose "
-                        "motion can be measured) or plain (as in datasets made before the option, e.g. bittc_v2)")  # fmt: skip
+    p.add_argument("--vehicle-texture", default="plain",
+                   help="vehicle paint and glass: plain (default, as in bittc_v1 and bittc_v2) or detailed (shading "
+                        "and spots inside the outline whose motion can be measured, as in bittc_v3)")  # fmt: skip
     p.add_argument("--workers", type=int, default=1)
     p.add_argument("--backend", default="local", help="local (process pool, default) or ray")
     p.add_argument("--ray-address", default=None, help="address of an existing Ray cluster (default: start a local one)")

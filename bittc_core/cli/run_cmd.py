@@ -37,8 +37,9 @@ def add_camera_flags(p: argparse.ArgumentParser) -> None:
     p.add_argument("--supersample", type=int, default=None, help="anti-aliasing factor 1-4 (default 1)")
     p.add_argument("--ground-texture", default="detailed",
                    help="road and verges: detailed (default) or smooth (as in dataset bittc_v1)")
-    p.add_argument("--vehicle-texture", default="detailed",
-                   help="vehicle paint and glass: detailed (default) or plain (as in datasets bittc_v1 and bittc_v2)")
+    p.add_argument("--vehicle-texture", default="plain",
+                   help="vehicle paint and glass: plain (default, as in datasets bittc_v1 and bittc_v2) or detailed "
+                        "(as in bittc_v3)")
 
 
 def textures_from_args(args):

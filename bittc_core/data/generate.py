@@ -48,7 +48,7 @@ class GenerationConfig:
     clip_length: int = 2  # frames per sample
     supersample: int = 1  # render at this factor and average down
     ground_texture: str = "detailed"  # sim.textures.GROUND_STYLES; "smooth" = bittc_v1's ground
-    vehicle_texture: str = "detailed"  # sim.textures.VEHICLE_STYLES; "plain" = bittc_v1's and v2's vehicles
+    vehicle_texture: str = "plain"  # sim.textures.VEHICLE_STYLES; "detailed" = bittc_v3's vehicles
 
     def __post_init__(self) -> None:
         if self.seed < 0:
