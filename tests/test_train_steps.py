@@ -150,7 +150,7 @@ def args(**kw):
     base = dict(data="synthetic", config="tiny", out="m.pt", resume=False, init=None, seed=0, steps=10,
                 batch_size=2, lr=3e-4, warmup_steps=2, val_every=5, val_limit=4, device="cpu", stage="binary",
                 freeze_binary=False, actor_weight=1.0, lovasz_weight=0.0, teacher=None, distill_weight=None,
-                pixel_thresholds=0.0, lr_mult=[])
+                pixel_thresholds=0.0, lr_mult=[], keep_checkpoints=False)
     base.update(kw)
     return argparse.Namespace(**base)
 
