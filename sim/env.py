@@ -58,6 +58,8 @@ class ScenarioEnv(gym.Env):
             raise ValueError(f"scenario {scenario!r} expands to {len(cases)} cases; name one case (e.g. {cases[0].name})")
         self.case = cases[0]
         self.camera = camera or CameraConfig()
+        if textures is not None and not isinstance(textures, TextureStyle):
+            raise ValueError(f"textures={textures!r}: expected a sim.textures.TextureStyle")
         self.textures = textures or TextureStyle()
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode {render_mode!r} is not supported")

@@ -23,6 +23,8 @@ def pair(tmp_path_factory):
     for name, img in (("prev.png", prev), ("latest.png", latest)):
         cv2.imwrite(str(d / name), img)
     cv2.imwrite(str(d / "small.png"), prev[:48])
+    cv2.imwrite(str(d / "tiny.png"), prev[:6, :6])
+    cv2.imwrite(str(d / "odd.png"), prev[:95])
     (d / "text.png").write_text("not an image")
     return d
 
@@ -65,13 +67,16 @@ def test_predict_resizes_and_runs_the_flow_baseline(pair, tmp_path):
     assert (inner > 0.5).mean() > 0.8
 
 
-def test_geofence_overlay_paints_the_shortest_threshold_on_top():
+@pytest.mark.parametrize("alpha", [1.0, 0.5])
+def test_geofence_overlay_paints_the_shortest_threshold_on_top(alpha):
     img = np.zeros((2, 2, 3), np.uint8)
     g = np.zeros((2, 2, 2), np.float32)
-    g[0] = 1.0  # tau 1 s: everything
-    g[1, 0, 0] = 1.0  # tau 0.5 s: one pixel
-    out = geofence_overlay(img, g, np.array([1.0, 0.5]), alpha=1.0)
-    assert out[0, 0].tolist() == [255, 0, 0] and out[1, 1].tolist() == [255, 220, 0]
+    g[0, :, 1:] = 1.0  # tau 1 s: the right column
+    g[1, 0, 1] = 1.0  # tau 0.5 s: one pixel of it
+    out = geofence_overlay(img, g, np.array([1.0, 0.5]), alpha=alpha)
+    assert out[0, 1].tolist() == [round(255 * alpha), 0, 0]  # once, in the shortest one's colour
+    assert out[1, 1].tolist() == [round(255 * alpha), round(220 * alpha), 0]
+    assert out[:, 0].tolist() == [[0, 0, 0], [0, 0, 0]]
 
 
 @pytest.mark.parametrize("files, extra, needle", [
@@ -83,10 +88,15 @@ def test_geofence_overlay_paints_the_shortest_threshold_on_top():
     (("prev.png", "latest.png"), ["--size", "95x288"], "multiples of 3"),
     (("prev.png", "latest.png"), ["--method", "oracle"], "--method 'oracle'"),
     (("prev.png", "latest.png"), ["--method", "flow", "--tta", "flip"], "--method bittc"),
-    (("prev.png", "latest.png"), ["--tta", "both"], "tta='both'"),
+    (("prev.png", "latest.png"), ["--tta", "both"], "--tta 'both'"),
+    (("prev.png", "latest.png"), ["--method", "flow", "--device", "cuda"], "--method bittc"),
+    (("prev.png", "latest.png"), ["--size", "8x8", "--method", "flow"], "--size"),
+    (("tiny.png", "tiny.png"), ["--method", "flow"], "6x6 px; height must be in [16"),
+    (("odd.png", "odd.png"), [], "95x288 px; the network needs height and width in multiples of 3"),
+    (("prev.png", "latest.png"), ["--tau", "nan"], "threshold nan s"),
 ])
 def test_predict_bad_input_exits_2_and_writes_nothing(pair, tmp_path, capsys, files, extra, needle):
     out = tmp_path / "o"
     assert main(["predict", *(str(pair / f) for f in files), "--out", str(out), *extra]) == 2
     assert needle in capsys.readouterr().err
-    assert not out.exists() or not any(out.iterdir())
+    assert not out.exists()  # every check runs before the folder is made

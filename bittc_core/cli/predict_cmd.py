@@ -35,14 +35,16 @@ from bittc_core.errors import CliError
 METHODS = ("bittc", "flow")  # the oracle needs ground truth, which image files lack
 DEFAULT_TAU_S = (0.5, 1.0, 2.0)
 OUTPUT_FILES = ("prediction.npz", "geofence.png", "ttc.png", "prediction.json")
+MIN_SIDE_PX = 16  # the bounds of ``cli.common.parse_size``
+MAX_SIZE_HW_PX = (2048, 4096)
 
 
 def add_parser(sub) -> argparse.ArgumentParser:
     p = sub.add_parser("predict", help="geofences and TTC of one pair of image files",
                        description=__doc__.split("\n\n", 1)[1], formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("prev", help="the earlier frame (image file)")
-    p.add_argument("latest", help="the latest frame (image file), frame_dt_s after PREV")
-    p.add_argument("--out", required=True, help="output folder")
+    p.add_argument("prev", metavar="PREV", help="the earlier frame (image file)")
+    p.add_argument("latest", metavar="LATEST", help="the latest frame (image file), frame_dt_s after PREV")
+    p.add_argument("--out", required=True, metavar="DIR", help="output folder")
     p.add_argument("--tau", type=float, nargs="+", default=list(DEFAULT_TAU_S), metavar="S",
                    help="geofence thresholds [s] from the latest frame (default 0.5 1 2)")
     p.add_argument("--method", default="bittc", help="bittc (the network, default) or flow (the DIS baseline)")
@@ -66,18 +68,35 @@ def read_rgb(path: str, flag: str) -> np.ndarray:
     return cv2.cvtColor(img, cv2.COLOR_BGR2RGB)
 
 
+def check_frame_size(size_hw: tuple[int, int], method: str, what: str) -> None:
+    """Frames the estimator can use: within ``parse_size``'s bounds, and for the network
+    multiples of its feature stride (3 px)."""
+    from bittc_core.model.network import FEATURE_STRIDE
+
+    h, w = size_hw
+    if not (MIN_SIDE_PX <= h <= MAX_SIZE_HW_PX[0] and MIN_SIDE_PX <= w <= MAX_SIZE_HW_PX[1]):
+        raise CliError(f"{what}: {h}x{w} px; height must be in [{MIN_SIDE_PX}, {MAX_SIZE_HW_PX[0]}] and width in "
+                       f"[{MIN_SIDE_PX}, {MAX_SIZE_HW_PX[1]}] px (--size HxW resizes)")
+    if method == "bittc" and (h % FEATURE_STRIDE or w % FEATURE_STRIDE):
+        raise CliError(f"{what}: {h}x{w} px; the network needs height and width in multiples of "
+                       f"{FEATURE_STRIDE} px (--size HxW resizes)")
+
+
 def geofence_overlay(image_rgb: np.ndarray, geofence: np.ndarray, thresholds_s: np.ndarray,
                      alpha: float = 0.5) -> np.ndarray:
     """Tint each geofence's inside (p > 0.5) from red (shortest tau) to yellow (longest);
-    a pixel inside several takes the shortest one's colour."""
-    out = image_rgb.astype(np.float32)
+    a pixel inside several takes the shortest one's colour (blended once, at ``alpha``)."""
     order = np.argsort(thresholds_s)[::-1]  # longest first, so shorter ones paint over
     k = len(order)
+    color = np.zeros(image_rgb.shape, np.float32)
+    tinted = np.zeros(image_rgb.shape[:2], bool)
     for rank, i in enumerate(order):
         t = 1.0 - rank / max(k - 1, 1)  # 1 for the longest, 0 for the shortest
-        color = np.array([255.0, 220.0 * t, 0.0], np.float32)
         inside = geofence[i] > 0.5
-        out[inside] = (1 - alpha) * out[inside] + alpha * color
+        color[inside] = (255.0, 220.0 * t, 0.0)
+        tinted |= inside
+    out = image_rgb.astype(np.float32)
+    out[tinted] = (1 - alpha) * out[tinted] + alpha * color[tinted]
     return out.round().astype(np.uint8)
 
 
@@ -87,23 +106,25 @@ def run(args) -> int:
     from bittc_core.data.npz_writer import save_npz
     from bittc_core.estimator import make_estimator
     from bittc_core.estimator.base import as_thresholds, quantize
-    from bittc_core.estimator.network import check_tta
+    from bittc_core.estimator.network import TTA_MODES
     from bittc_core.ttc import eta_to_tau
     from sim.video import ttc_overlay
 
     if args.method not in METHODS:
         raise CliError(f"--method {args.method!r}: expected one of {METHODS}")
-    check_tta(args.tta)
+    if args.tta not in TTA_MODES:
+        raise CliError(f"--tta {args.tta!r}: expected one of {TTA_MODES}")
     check_device(args.device)
-    if args.method != "bittc" and (args.weights is not None or args.tta != "none"):
-        raise CliError(f"--weights / --tta apply to --method bittc, not {args.method!r}")
+    if args.method != "bittc" and (args.weights is not None or args.tta != "none" or args.device != "auto"):
+        raise CliError(f"--weights / --tta / --device apply to --method bittc, not {args.method!r}")
+    size = parse_size(args.size) if args.size is not None else None
     prev, latest = read_rgb(args.prev, "PREV"), read_rgb(args.latest, "LATEST")
-    if args.size is not None:
-        h, w = parse_size(args.size)
-        prev, latest = (cv2.resize(img, (w, h), interpolation=cv2.INTER_AREA) for img in (prev, latest))
     if prev.shape != latest.shape:
         raise CliError(f"PREV is {prev.shape[0]}x{prev.shape[1]} px but LATEST is "
                        f"{latest.shape[0]}x{latest.shape[1]} px: the frames must be the same size")
+    if size is not None:
+        prev, latest = (cv2.resize(img, size[::-1], interpolation=cv2.INTER_AREA) for img in (prev, latest))
+    check_frame_size(latest.shape[:2], args.method, "--size" if size is not None else "PREV and LATEST")
     est = make_estimator(args.method, weights=args.weights, device=args.device,
                          **({"tta": args.tta} if args.method == "bittc" else {}))
     thr = as_thresholds(args.tau, est.tau_range_s, sorted_=False)
@@ -121,7 +142,8 @@ def run(args) -> int:
     quantized = quantize(geofence[order]).astype(np.int16)
 
     summary = {
-        "method": args.method, "weights": args.weights, "tta": args.tta, "device": args.device,
+        "method": args.method, "weights": args.weights, "tta": args.tta,
+        "device": str(getattr(est, "device", "cpu")),
         "prev": args.prev, "latest": args.latest, "size_hw": list(latest.shape[:2]),
         "frame_dt_s": est.dt_s, "thresholds_s": thr.tolist(),
         "inside_share": [round(float((g > 0.5).mean()), 6) for g in geofence],

@@ -78,7 +78,7 @@ def as_thresholds(thresholds_s, tau_range_s: tuple[float, float], *, sorted_: bo
         raise EstimatorInputError("thresholds_s is empty: give at least one threshold [s]")
     for t in thr:
         if not np.isfinite(t) or t <= 0.0:
-            raise EstimatorInputError(f"threshold {t!r} s: thresholds must be finite and > 0")
+            raise EstimatorInputError(f"threshold {float(t)!r} s: thresholds must be finite and > 0")
         lo, hi = tau_range_s
         if not lo * (1 - RANGE_RTOL) <= t <= hi * (1 + RANGE_RTOL):
             raise EstimatorInputError(f"threshold {t:g} s outside the trained range [{lo:g}, {hi:g}] s")
