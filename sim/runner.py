@@ -24,8 +24,8 @@ import yaml
 from controllers.base import BrakeCommand, Controller, Observation
 from scenarios.spec import ScenarioCase
 from sim.camera import CameraConfig
-from sim.textures import TextureStyle
 from sim.episode import ScenarioSim
+from sim.textures import TextureStyle
 from sim.traffic import ActuatorConfig
 from sim.video import VideoWriter, hud, ttc_overlay
 

@@ -10,14 +10,19 @@ from pathlib import Path
 from bittc_core.errors import CliError
 
 
+MIN_SIDE_PX = 16  # bounds of an image size (``parse_size``) [px]
+MAX_SIZE_HW_PX = (2048, 4096)
+
+
 def parse_size(text: str) -> tuple[int, int]:
     """'96x288' -> (96, 288): height x width in px."""
     m = re.fullmatch(r"(\d+)x(\d+)", text.strip().lower())
     if not m:
         raise CliError(f"--size {text!r}: expected HxW in pixels, e.g. 96x288")
     h, w = int(m.group(1)), int(m.group(2))
-    if not (16 <= h <= 2048 and 16 <= w <= 4096):
-        raise CliError(f"--size {text!r}: height must be in [16, 2048] and width in [16, 4096] px")
+    if not (MIN_SIDE_PX <= h <= MAX_SIZE_HW_PX[0] and MIN_SIDE_PX <= w <= MAX_SIZE_HW_PX[1]):
+        raise CliError(f"--size {text!r}: height must be in [{MIN_SIDE_PX}, {MAX_SIZE_HW_PX[0]}] and width in "
+                       f"[{MIN_SIDE_PX}, {MAX_SIZE_HW_PX[1]}] px")
     return h, w
 
 
@@ -31,6 +36,17 @@ def non_negative_int(name: str, value: int, upper: int | None = None) -> int:
     if value < 0 or (upper is not None and value > upper):
         raise CliError(f"{name} {value}: must be in [0, {upper}]" if upper is not None else f"{name} {value}: must be >= 0")
     return value
+
+
+def texture_style(ground: str, vehicles: str):
+    """-> ``sim.textures.TextureStyle``; an unknown style names its flag."""
+    from sim.textures import GROUND_STYLES, VEHICLE_STYLES, TextureStyle
+
+    if ground not in GROUND_STYLES:
+        raise CliError(f"--ground-texture {ground!r}: must be one of {', '.join(GROUND_STYLES)}")
+    if vehicles not in VEHICLE_STYLES:
+        raise CliError(f"--vehicle-texture {vehicles!r}: must be one of {', '.join(VEHICLE_STYLES)}")
+    return TextureStyle(ground, vehicles)
 
 
 MAX_SEED = 2**32 - 1

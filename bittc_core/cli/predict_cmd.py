@@ -29,14 +29,13 @@ from pathlib import Path
 
 import numpy as np
 
-from bittc_core.cli.common import add_device_flag, check_device, parse_size, writable_dir
+from bittc_core.cli.common import (MAX_SIZE_HW_PX, MIN_SIDE_PX, add_device_flag, check_device, parse_size,
+                                   writable_dir)
 from bittc_core.errors import CliError
 
 METHODS = ("bittc", "flow")  # the oracle needs ground truth, which image files lack
 DEFAULT_TAU_S = (0.5, 1.0, 2.0)
 OUTPUT_FILES = ("prediction.npz", "geofence.png", "ttc.png", "prediction.json")
-MIN_SIDE_PX = 16  # the bounds of ``cli.common.parse_size``
-MAX_SIZE_HW_PX = (2048, 4096)
 
 
 def add_parser(sub) -> argparse.ArgumentParser:
@@ -153,7 +152,7 @@ def run(args) -> int:
     try:
         save_npz(tmp / "prediction.npz", {"geofence": geofence.astype(np.float32), "thresholds_s": thr,
                                           "quantized": quantized, "eta": eta.astype(np.float32),
-                                          "ttc_s": ttc.astype(np.float32)})
+                                          "ttc_s": ttc})
         ones = np.ones(ttc.shape, bool)
         for name, img in (("geofence.png", geofence_overlay(latest, geofence, thr)),
                           ("ttc.png", ttc_overlay(latest, ttc, ones, ones.astype(np.int32), 0.5, 0.5))):

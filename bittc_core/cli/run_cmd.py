@@ -8,7 +8,7 @@ from pathlib import Path
 
 import controllers
 import scenarios
-from bittc_core.cli.common import MAX_SEED, non_negative_int, parse_size, writable_dir
+from bittc_core.cli.common import MAX_SEED, non_negative_int, parse_size, texture_style, writable_dir
 from bittc_core.errors import CliError
 from sim.camera import CameraConfig
 
@@ -43,13 +43,7 @@ def add_camera_flags(p: argparse.ArgumentParser) -> None:
 
 
 def textures_from_args(args):
-    from sim.textures import GROUND_STYLES, VEHICLE_STYLES, TextureStyle
-
-    if args.ground_texture not in GROUND_STYLES:
-        raise CliError(f"--ground-texture {args.ground_texture!r}: must be one of {', '.join(GROUND_STYLES)}")
-    if args.vehicle_texture not in VEHICLE_STYLES:
-        raise CliError(f"--vehicle-texture {args.vehicle_texture!r}: must be one of {', '.join(VEHICLE_STYLES)}")
-    return TextureStyle(args.ground_texture, args.vehicle_texture)
+    return texture_style(args.ground_texture, args.vehicle_texture)
 
 
 def camera_from_args(args) -> CameraConfig:

@@ -22,9 +22,9 @@ from pathlib import Path
 import numpy as np
 import yaml
 
+from bittc_core.cli.common import texture_style
 from bittc_core.data.format import SPLITS, sample_dirname, sample_is_complete, write_sample
 from bittc_core.errors import CliError
-from sim.textures import GROUND_STYLES, VEHICLE_STYLES
 
 SPLIT_SEED_BASE = {"train": 0, "val": 1_000_000_000, "test": 2_000_000_000}
 MAX_SAMPLES_PER_SPLIT = 1_000_000_000
@@ -59,10 +59,7 @@ class GenerationConfig:
             raise CliError(f"--fps {self.fps_hz}: must be in [1, 100] Hz")
         if self.supersample not in (1, 2, 3, 4):
             raise CliError(f"--supersample {self.supersample}: must be 1, 2, 3 or 4")
-        if self.ground_texture not in GROUND_STYLES:
-            raise CliError(f"--ground-texture {self.ground_texture!r}: must be one of {', '.join(GROUND_STYLES)}")
-        if self.vehicle_texture not in VEHICLE_STYLES:
-            raise CliError(f"--vehicle-texture {self.vehicle_texture!r}: must be one of {', '.join(VEHICLE_STYLES)}")
+        texture_style(self.ground_texture, self.vehicle_texture)
 
 
 def sample_seed(split: str, index: int) -> int:
