@@ -1,6 +1,6 @@
-"""Latency of the Binary-TTC estimator vs. K thresholds at 96x288, streaming, 2 threads.
+"""Latency of the Binary-TTC estimator vs. K thresholds, streaming, 2 threads.
 
-    python bench/bench_network.py [--config cpu-small-corr] [--weights CKPT] [--calls 30]
+    python bench/bench_network.py [--config cpu-small-corr] [--weights CKPT] [--calls 30] [--size 96x288]
 
 Prints a table; asserts nothing. Same code as ``bittc bench``.
 """

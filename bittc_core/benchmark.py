@@ -1,4 +1,4 @@
-"""Latency benchmark of the estimators at 96x288 on the CPU (prints, never asserts).
+"""Latency benchmark of the estimators on the CPU (prints, never asserts); 96x288 unless told.
 
 Streaming protocol: a sequence of distinct random frames f0, f1, ...; call j asks for
 (f_j, f_j+1), so the previous frame's features come from the cache and each call pays

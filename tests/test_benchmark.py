@@ -37,3 +37,21 @@ def test_settings_need_one_threshold_and_another_distinct_k(ks):
 def test_settings_need_a_warmup_round():
     with pytest.raises(ValueError, match="warmup=0"):
         BenchSettings(warmup=0)
+
+
+@pytest.mark.parametrize("size, needle", [("95x288", "multiples of 3"), ("96by288", "expected HxW"),
+                                          ("9x288", "height must be in")])
+def test_bench_refuses_a_bad_size_before_timing(size, needle, capsys):
+    from bittc_core.cli import main
+
+    assert main(["bench", "--size", size, "--calls", "1"]) == 2
+    captured = capsys.readouterr()
+    assert needle in captured.err and size in captured.err
+    assert "config" not in captured.out  # no timing table began
+
+
+def test_bench_times_the_size_it_is_given(capsys):
+    from bittc_core.cli import main
+
+    assert main(["bench", "--config", "tiny", "--size", "48x96", "--calls", "1", "--threads", "1"]) == 0
+    assert "48x96 px" in capsys.readouterr().out

@@ -26,6 +26,20 @@ def parse_size(text: str) -> tuple[int, int]:
     return h, w
 
 
+def check_frame_size(size_hw: tuple[int, int], method: str, what: str, hint: str = " (--size HxW resizes)") -> None:
+    """Frames the estimator can use: within ``parse_size``'s bounds, and for the network
+    multiples of its feature stride (3 px). ``hint`` ends the error message."""
+    from bittc_core.model.network import FEATURE_STRIDE
+
+    h, w = size_hw
+    if not (MIN_SIDE_PX <= h <= MAX_SIZE_HW_PX[0] and MIN_SIDE_PX <= w <= MAX_SIZE_HW_PX[1]):
+        raise CliError(f"{what}: {h}x{w} px; height must be in [{MIN_SIDE_PX}, {MAX_SIZE_HW_PX[0]}] and width in "
+                       f"[{MIN_SIDE_PX}, {MAX_SIZE_HW_PX[1]}] px{hint}")
+    if method == "bittc" and (h % FEATURE_STRIDE or w % FEATURE_STRIDE):
+        raise CliError(f"{what}: {h}x{w} px; the network needs height and width in multiples of "
+                       f"{FEATURE_STRIDE} px{hint}")
+
+
 def positive_int(name: str, value: int) -> int:
     if value <= 0:
         raise CliError(f"{name} {value}: must be > 0")

@@ -29,7 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
-from bittc_core.cli.common import (MAX_SIZE_HW_PX, MIN_SIDE_PX, add_device_flag, check_device, parse_size,
+from bittc_core.cli.common import (add_device_flag, check_device, check_frame_size, parse_size,
                                    writable_dir)
 from bittc_core.errors import CliError
 
@@ -65,20 +65,6 @@ def read_rgb(path: str, flag: str) -> np.ndarray:
     if img is None:
         raise CliError(f"{flag} {path!r}: not an image OpenCV can read")
     return cv2.cvtColor(img, cv2.COLOR_BGR2RGB)
-
-
-def check_frame_size(size_hw: tuple[int, int], method: str, what: str) -> None:
-    """Frames the estimator can use: within ``parse_size``'s bounds, and for the network
-    multiples of its feature stride (3 px)."""
-    from bittc_core.model.network import FEATURE_STRIDE
-
-    h, w = size_hw
-    if not (MIN_SIDE_PX <= h <= MAX_SIZE_HW_PX[0] and MIN_SIDE_PX <= w <= MAX_SIZE_HW_PX[1]):
-        raise CliError(f"{what}: {h}x{w} px; height must be in [{MIN_SIDE_PX}, {MAX_SIZE_HW_PX[0]}] and width in "
-                       f"[{MIN_SIDE_PX}, {MAX_SIZE_HW_PX[1]}] px (--size HxW resizes)")
-    if method == "bittc" and (h % FEATURE_STRIDE or w % FEATURE_STRIDE):
-        raise CliError(f"{what}: {h}x{w} px; the network needs height and width in multiples of "
-                       f"{FEATURE_STRIDE} px (--size HxW resizes)")
 
 
 def geofence_overlay(image_rgb: np.ndarray, geofence: np.ndarray, thresholds_s: np.ndarray,
