@@ -12,11 +12,11 @@ from __future__ import annotations
 
 import dataclasses
 import os
-import tempfile
 from pathlib import Path
 
 import torch
 
+from bittc_core.atomic import open_temp_beside
 from bittc_core.errors import CliError
 from bittc_core.model import CONFIGS, BinaryTTCNet, ModelConfig, get_config
 from bittc_core.model.config import GROWTH_COUNTS, GROWTH_FLAGS, GROWTH_SWITCHES
@@ -39,13 +39,13 @@ def save_checkpoint(path: str | os.PathLike, payload: dict) -> None:
         raise ValueError(f"checkpoint payload lacks {missing}")
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    os.close(fd)
+    fd, tmp = open_temp_beside(path)
     try:
-        torch.save(payload, tmp)
+        with os.fdopen(fd, "wb") as f:
+            torch.save(payload, f)
         os.replace(tmp, path)
     except BaseException:
-        Path(tmp).unlink(missing_ok=True)
+        tmp.unlink(missing_ok=True)
         raise
 
 

@@ -2,6 +2,8 @@
 across growth (the global-context block, growth blocks), the release copy."""
 
 import dataclasses
+import os
+import stat
 
 import pytest
 import torch
@@ -24,6 +26,15 @@ def test_round_trip_rebuilds_the_same_network(tmp_path):
     x = torch.rand(1, 3, 24, 48), torch.rand(1, 3, 24, 48), torch.tensor([[0.8, 0.95]])
     with torch.no_grad():
         torch.testing.assert_close(loaded(*x), net(*x))
+
+
+def test_a_checkpoint_is_as_readable_as_any_new_file(tmp_path):
+    old = os.umask(0o022)
+    try:
+        save_checkpoint(tmp_path / "m.pt", make_payload(BinaryTTCNet(get_config("tiny")), "tiny", {}))
+    finally:
+        os.umask(old)
+    assert stat.S_IMODE((tmp_path / "m.pt").stat().st_mode) == 0o644
 
 
 def test_wrong_config_is_a_clear_error(tmp_path):
