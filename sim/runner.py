@@ -21,6 +21,7 @@ import cv2
 import numpy as np
 import yaml
 
+from bittc_core.atomic import write_text_atomic
 from controllers.base import BrakeCommand, Controller, Observation
 from scenarios.spec import ScenarioCase
 from sim.camera import CameraConfig
@@ -41,12 +42,6 @@ def _r(x: float | None, nd: int = 4) -> float | None:
     if x is None or not math.isfinite(x):
         return None
     return round(float(x), nd)
-
-
-def atomic_write_text(path: Path, text: str) -> None:
-    tmp = path.with_name(f".{path.name}.tmp")
-    tmp.write_text(text)
-    os.replace(tmp, path)
 
 
 class _CommandQueue:
@@ -216,6 +211,6 @@ def _write_outputs(out_dir: Path, case, controller, camera, seed, actuator, summ
         "actuator": asdict(actuator),
         "video": video,
     }
-    atomic_write_text(out_dir / "trace.csv", buf.getvalue())
-    atomic_write_text(out_dir / "config.yaml", yaml.safe_dump(config, sort_keys=False))
-    atomic_write_text(out_dir / "summary.json", json.dumps(summary, indent=2) + "\n")
+    write_text_atomic(out_dir / "trace.csv", buf.getvalue())
+    write_text_atomic(out_dir / "config.yaml", yaml.safe_dump(config, sort_keys=False))
+    write_text_atomic(out_dir / "summary.json", json.dumps(summary, indent=2) + "\n")

@@ -8,9 +8,10 @@ import json
 from pathlib import Path
 
 import controllers
+from bittc_core.atomic import write_text_atomic
 from scenarios.spec import ScenarioCase
 from sim.camera import CameraConfig
-from sim.runner import SUMMARY_KEYS, atomic_write_text, run_case
+from sim.runner import SUMMARY_KEYS, run_case
 from sim.textures import TextureStyle
 
 TABLE_COLUMNS = (
@@ -43,8 +44,8 @@ def write_table(out_dir: Path, summaries: list[dict]) -> None:
     w.writeheader()
     for s in summaries:
         w.writerow({k: ("" if s[k] is None else s[k]) for k in SUMMARY_KEYS})
-    atomic_write_text(out_dir / "summary.csv", buf.getvalue())
-    atomic_write_text(out_dir / "summary.json", json.dumps(summaries, indent=2) + "\n")
+    write_text_atomic(out_dir / "summary.csv", buf.getvalue())
+    write_text_atomic(out_dir / "summary.json", json.dumps(summaries, indent=2) + "\n")
 
 
 def format_table(summaries: list[dict]) -> str:
