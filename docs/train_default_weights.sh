@@ -15,8 +15,10 @@
 # then a seventh binary run from that checkpoint (the sixth's settings, 4,000 steps, seed 9)
 # and a shorter frozen continuous stage on it; then config cpu-small-corr grown from that
 # (the correlation volume, starting at zero), three more binary runs (the second and the
-# third with the correlation convs at 10x the learning rate, --lr-mult) and a last frozen
-# continuous stage, whose best checkpoint ships.
+# third with the correlation convs at 10x the learning rate, --lr-mult) and a frozen
+# continuous stage; then a fourth correlation run from that, keeping the weights of every
+# validation step (--keep-checkpoints), the mean of its last three (docs/average_weights.py)
+# and a last, shorter frozen continuous stage on that mean, whose best checkpoint ships.
 set -euo pipefail
 DATA=${1:-data/bittc_v1}
 DATA2=${2:-data/bittc_v2}
@@ -35,6 +37,8 @@ CORR_STEPS=${CORR_STEPS:-4000}
 CORR2_STEPS=${CORR2_STEPS:-4000}
 CORR3_STEPS=${CORR3_STEPS:-4000}
 CONT_CORR_STEPS=${CONT_CORR_STEPS:-500}
+CORR4_STEPS=${CORR4_STEPS:-3000}
+CONT_MEAN_STEPS=${CONT_MEAN_STEPS:-250}
 mkdir -p "$OUT"
 bittc train --data "$DATA" --config cpu-small --stage flow --steps "$FLOW_STEPS" --seed 0 --out "$OUT/flow.pt"
 bittc train --data "$DATA" --config cpu-small --stage binary --steps "$BINARY_STEPS" --seed 0 --init "$OUT/flow.pt" --out "$OUT/binary.pt"
@@ -52,8 +56,14 @@ bittc train --data "$DATA2" --config cpu-small-corr --stage binary --steps "$COR
 bittc train --data "$DATA2" --config cpu-small-corr --stage binary --steps "$CORR2_STEPS" --seed 14 --lr 1e-4 --val-every 1000 --val-limit 256 --lovasz-weight 0.5 --actor-weight 2 --lr-mult segnet.corr_=10 --init "$OUT/corr.pt" --out "$OUT/corr2.pt"
 bittc train --data "$DATA2" --config cpu-small-corr --stage binary --steps "$CORR3_STEPS" --seed 15 --lr 1e-4 --val-every 1000 --val-limit 256 --lovasz-weight 0.5 --actor-weight 2 --lr-mult segnet.corr_=10 --init "$OUT/corr2.pt" --out "$OUT/corr3.pt"
 bittc train --data "$DATA2" --config cpu-small-corr --stage continuous --freeze-binary --steps "$CONT_CORR_STEPS" --seed 0 --lr 2e-4 --val-every 125 --init "$OUT/corr3.pt" --out "$OUT/continuous_corr.pt"
+# a fourth correlation run (its validation steps at 1/4, 2/4, 3/4 and 4/4 of the run kept),
+# the mean of the last three, and the frozen continuous stage on that mean
+CORR4_VAL=$((CORR4_STEPS / 4))
+bittc train --data "$DATA2" --config cpu-small-corr --stage binary --steps "$CORR4_STEPS" --seed 20 --lr 1e-4 --val-every "$CORR4_VAL" --val-limit 256 --lovasz-weight 0.5 --actor-weight 2 --lr-mult segnet.corr_=10 --keep-checkpoints --init "$OUT/continuous_corr.pt" --out "$OUT/corr4.pt"
+python docs/average_weights.py "$OUT/corr4_mean.pt" $(for k in 2 3 4; do printf '%s/corr4.binary.step%06d.pt ' "$OUT" $((k * CORR4_VAL)); done)
+bittc train --data "$DATA2" --config cpu-small-corr --stage continuous --freeze-binary --steps "$CONT_MEAN_STEPS" --warmup-steps 50 --seed 0 --lr 2e-4 --val-every 125 --init "$OUT/corr4_mean.pt" --out "$OUT/continuous_mean.pt"
 # ship the continuous stage's best checkpoint (by val MiD; the binary part is the same in all)
 python -c "import sys; from bittc_core.checkpoint import load_checkpoint, release_payload, save_checkpoint
 save_checkpoint(sys.argv[2], release_payload(load_checkpoint(sys.argv[1], map_location='cpu')))" \
-    "$OUT/continuous_corr.pt" bittc_core/weights/bittc_default.pt
+    "$OUT/continuous_mean.pt" bittc_core/weights/bittc_default.pt
 echo "wrote bittc_core/weights/bittc_default.pt"
