@@ -12,6 +12,12 @@ from bittc_core.errors import CliError
 
 MIN_SIDE_PX = 16  # bounds of an image size (``parse_size``) [px]
 MAX_SIZE_HW_PX = (2048, 4096)
+_SIZE_BOUNDS = (f"height must be in [{MIN_SIDE_PX}, {MAX_SIZE_HW_PX[0]}] and width in "
+                f"[{MIN_SIDE_PX}, {MAX_SIZE_HW_PX[1]}] px")
+
+
+def _size_in_bounds(h: int, w: int) -> bool:
+    return MIN_SIDE_PX <= h <= MAX_SIZE_HW_PX[0] and MIN_SIDE_PX <= w <= MAX_SIZE_HW_PX[1]
 
 
 def parse_size(text: str) -> tuple[int, int]:
@@ -20,9 +26,8 @@ def parse_size(text: str) -> tuple[int, int]:
     if not m:
         raise CliError(f"--size {text!r}: expected HxW in pixels, e.g. 96x288")
     h, w = int(m.group(1)), int(m.group(2))
-    if not (MIN_SIDE_PX <= h <= MAX_SIZE_HW_PX[0] and MIN_SIDE_PX <= w <= MAX_SIZE_HW_PX[1]):
-        raise CliError(f"--size {text!r}: height must be in [{MIN_SIDE_PX}, {MAX_SIZE_HW_PX[0]}] and width in "
-                       f"[{MIN_SIDE_PX}, {MAX_SIZE_HW_PX[1]}] px")
+    if not _size_in_bounds(h, w):
+        raise CliError(f"--size {text!r}: {_SIZE_BOUNDS}")
     return h, w
 
 
@@ -32,9 +37,8 @@ def check_frame_size(size_hw: tuple[int, int], method: str, what: str, hint: str
     from bittc_core.model.network import FEATURE_STRIDE
 
     h, w = size_hw
-    if not (MIN_SIDE_PX <= h <= MAX_SIZE_HW_PX[0] and MIN_SIDE_PX <= w <= MAX_SIZE_HW_PX[1]):
-        raise CliError(f"{what}: {h}x{w} px; height must be in [{MIN_SIDE_PX}, {MAX_SIZE_HW_PX[0]}] and width in "
-                       f"[{MIN_SIDE_PX}, {MAX_SIZE_HW_PX[1]}] px{hint}")
+    if not _size_in_bounds(h, w):
+        raise CliError(f"{what}: {h}x{w} px; {_SIZE_BOUNDS}{hint}")
     if method == "bittc" and (h % FEATURE_STRIDE or w % FEATURE_STRIDE):
         raise CliError(f"{what}: {h}x{w} px; the network needs height and width in multiples of "
                        f"{FEATURE_STRIDE} px{hint}")
