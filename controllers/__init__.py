@@ -1,23 +1,66 @@
-"""Braking policies: observation -> brake command. Registry by name."""
+"""Braking policies: observation -> brake command.
+
+Controllers are built from a registry of string entry points (as Gymnasium registers
+envs), so that listing them never imports torch: ``make("geofence", thresholds_s=(1.0,
+2.0))``. ``make("my_module:MyClass")`` loads a user's own ``Controller`` subclass.
+"""
 
 from __future__ import annotations
 
-from typing import Callable
+import importlib
+import inspect
+from typing import Any
 
-from controllers.base import BrakeCommand, Controller, Observation
+from bittc_core.errors import ConfigError
+from controllers.base import BrakeCommand, Calibration, Controller, GeofenceView, Observation
 from controllers.none import NoController
 from controllers.oracle import OracleConfig, OracleController
 
-REGISTRY: dict[str, Callable[[], Controller]] = {
-    "none": NoController,
-    "oracle": OracleController,
+#: name -> "module:callable" building the controller; settings are keyword arguments
+REGISTRY: dict[str, str] = {
+    "none": "controllers.none:NoController",
+    "oracle": "controllers.oracle:OracleController",
+    "geofence": "controllers.geofence:make_geofence",
+    "flow": "controllers.geofence:make_flow",
 }
+#: controllers whose decisions come from an estimator's geofences (they take thresholds)
+ESTIMATOR_CONTROLLERS = ("geofence", "flow")
 
 
-def make(name: str) -> Controller:
-    if name not in REGISTRY:
-        raise ValueError(f"unknown controller {name!r}; known: {', '.join(REGISTRY)}")
-    return REGISTRY[name]()
+def _load(entry: str, what: str):
+    module_name, sep, attr = entry.partition(":")
+    if not sep or not module_name or not attr:
+        raise ConfigError(f"controller {what!r}: expected a registered name ({', '.join(REGISTRY)}) or module:Class")
+    try:
+        module = importlib.import_module(module_name)
+    except ImportError as e:
+        raise ConfigError(f"controller {what!r}: cannot import module {module_name!r} ({e})") from None
+    try:
+        return getattr(module, attr)
+    except AttributeError:
+        raise ConfigError(f"controller {what!r}: module {module_name!r} has no attribute {attr!r}") from None
 
 
-__all__ = ["BrakeCommand", "Controller", "Observation", "OracleConfig", "OracleController", "NoController", "REGISTRY", "make"]
+def make(name: str, **settings: Any) -> Controller:
+    """Build a registered controller, or a ``module:Class`` subclass of ``Controller``.
+
+    ``settings`` are keyword arguments of its builder; one it does not take is refused."""
+    entry = REGISTRY.get(name)
+    if entry is None and ":" not in name:
+        raise ConfigError(f"unknown controller {name!r}; known: {', '.join(REGISTRY)} (or module:Class)")
+    factory = _load(entry or name, name)
+    if entry is None and not (inspect.isclass(factory) and issubclass(factory, Controller)):
+        raise ConfigError(f"controller {name!r}: {factory!r} is not a subclass of controllers.Controller")
+    params = inspect.signature(factory).parameters
+    takes_any = any(p.kind is inspect.Parameter.VAR_KEYWORD for p in params.values())
+    unknown = [k for k in settings if k not in params and not takes_any]
+    if unknown:
+        raise ConfigError(f"controller {name!r} takes no setting {unknown[0]!r}")
+    ctrl = factory(**settings)
+    if not isinstance(ctrl, Controller):
+        raise ConfigError(f"controller {name!r}: built a {type(ctrl).__name__}, not a controllers.Controller")
+    return ctrl
+
+
+__all__ = ["BrakeCommand", "Calibration", "Controller", "GeofenceView", "Observation", "OracleConfig",
+           "OracleController", "NoController", "REGISTRY", "ESTIMATOR_CONTROLLERS", "make"]

@@ -1,49 +1,129 @@
 """The controller interface: what a braking policy sees and what it returns.
 
-A controller is called once per camera frame. It observes the camera image and the
-ego's own speed (:class:`Observation`). Ground truth (:class:`sim.episode.StepTruth`)
-is passed separately and only controllers that declare ``uses_ground_truth`` may read
-it: the oracle is the upper bound, not a deployable policy.
+A controller is built once with its settings and reset at the start of every run with
+the car's calibration (:class:`Calibration`). The closed loop (``sim.loop``) calls
+``act`` once per estimator job: on the frame the latency schedule hands it, not
+necessarily on every frame. A deployable controller observes only what a car has
+(:class:`Observation`): the two latest frames of its pair, its own speed and the
+calibration. Ground truth (:class:`sim.episode.StepTruth`) is passed only to
+controllers that declare ``uses_ground_truth`` (the oracle: the upper bound).
 
-The command is a requested deceleration [m/s^2] (>= 0) and a warning flag. The
-simulator applies it ``compute_latency_s`` after the frame's capture (the policy's
-own compute time, charged to the reaction time), then through the actuator model.
+Latency is not the policy's business: the loop charges the job's latency (measured,
+fixed or from a device profile, see ``sim.latency``) and applies the command when the
+output is ready; the brake actuator's delay comes after that.
+
+Writing one (``--controller my_module:MyController`` loads it; see
+``examples/my_controller.py``)::
+
+    class MyController(Controller):
+        name = "mine"
+        needs_camera = True          # the loop renders frames and pairs them
+
+        def reset(self, calibration):
+            self.cal = calibration
+
+        def act(self, obs, truth):
+            ...                      # obs.image_prev, obs.image_latest, obs.ego_speed_mps
+            return BrakeCommand(decel_mps2=0.0, warning=False)
 """
 
 from __future__ import annotations
 
+import math
 from abc import ABC, abstractmethod
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from typing import Any, Mapping
 
 import numpy as np
 
 
 @dataclass(frozen=True)
+class Calibration:
+    """What the car knows about its own camera and body.
+
+    Convention: pinhole camera, pixel centres at integer (u, v) = (column, row); the
+    camera looks along the ego's x axis, pitched down by ``pitch_deg``, its optical
+    centre ``mount_height_m`` above the ground and ``mount_forward_m`` ahead of the
+    centre of the ego's footprint. Camera-plane TTC (the estimator's) counts to the
+    plane through the optical centre; the front bumper lies ``bumper_ahead_m`` ahead.
+    """
+
+    width_px: int
+    height_px: int
+    fx_px: float
+    fy_px: float
+    cx_px: float
+    cy_px: float
+    mount_height_m: float  # [m] optical centre above the ground
+    mount_forward_m: float  # [m] optical centre ahead of the footprint centre
+    pitch_deg: float  # [deg] positive looks down
+    frame_dt_s: float  # [s] camera frame interval
+    ego_length_m: float  # [m] the ego's footprint
+    ego_width_m: float  # [m]
+
+    @property
+    def bumper_ahead_m(self) -> float:
+        """[m] front bumper ahead of the camera plane (along the ego's x axis)."""
+        return self.ego_length_m / 2 - self.mount_forward_m
+
+    @classmethod
+    def from_camera(cls, camera, ego_size_m: tuple[float, ...]) -> "Calibration":
+        """From a ``sim.camera.CameraConfig`` and the ego's (length, width[, height]) [m]."""
+        fx, fy, cx, cy = (float(x) for x in camera.intrinsics())
+        return cls(camera.width_px, camera.height_px, fx, fy, cx, cy, camera.mount_height_m, camera.mount_forward_m,
+                   camera.pitch_deg, camera.dt_s, float(ego_size_m[0]), float(ego_size_m[1]))
+
+
+@dataclass(frozen=True)
 class Observation:
     t_s: float  # capture time of the latest frame [s]
-    ego_speed_mps: float  # [m/s]
-    image_latest: np.ndarray | None  # (H, W, 3) uint8, None when the controller needs no camera
-    image_prev: np.ndarray | None  # the frame before, same format
-    dt_s: float  # frame interval [s]
+    ego_speed_mps: float  # the ego's speed at that capture [m/s]
+    image_latest: np.ndarray | None  # (H, W, 3) uint8 RGB; None when the controller needs no camera
+    image_prev: np.ndarray | None  # the frame captured frame_stride frames before, same format
+    dt_s: float  # [s] time between the two frames of the pair
+    calibration: Calibration | None = None
+
+
+@dataclass(frozen=True)
+class GeofenceView:
+    """What a geofence controller saw in one job, for videos and fence-lag measurement.
+
+    ``maps``: (K, H, W) float32 p(0 < tau <= thresholds_s[i]) of the latest frame;
+    ``counted``: (H, W) bool, the pixels that counted as in-path evidence for any fence;
+    ``corridor``: (H, W) bool, the ego's corridor for the largest fence."""
+
+    thresholds_s: tuple[float, ...]  # [s] camera-plane TTC, from the latest frame
+    maps: np.ndarray
+    counted: np.ndarray
+    corridor: np.ndarray
 
 
 @dataclass(frozen=True)
 class BrakeCommand:
     decel_mps2: float = 0.0  # requested deceleration [m/s^2], >= 0
     warning: bool = False  # forward-collision warning on
-    compute_latency_s: float = 0.0  # time the policy took to decide [s]
+    telemetry: Mapping[str, Any] = field(default_factory=dict, compare=False)  # scalars for trace.csv
+    view: GeofenceView | None = field(default=None, compare=False)  # maps behind the decision, if any
+
+    def check(self, who: str) -> None:
+        """Refuse a command that is not a deceleration [m/s^2] >= 0."""
+        d = self.decel_mps2
+        if isinstance(d, bool) or not isinstance(d, (int, float, np.floating)) or not math.isfinite(d) or d < 0:
+            raise ValueError(f"controller {who!r} returned decel_mps2 = {d!r}: must be a finite number >= 0")
 
 
 class Controller(ABC):
     """Observation (+ truth for oracles) -> brake command."""
 
     name: str = "controller"
-    needs_camera: bool = False
-    uses_ground_truth: bool = False
+    needs_camera: bool = False  # the loop renders frames and hands over pairs
+    uses_ground_truth: bool = False  # oracles only
+    num_alphas: int = 0  # thresholds evaluated per job (the K a latency profile charges)
+    frame_stride: int = 1  # the pair is (frame k - frame_stride, frame k)
 
-    def reset(self) -> None:
-        """Forget any state from a previous run."""
+    def reset(self, calibration: Calibration) -> None:
+        """Forget any state from a previous run; ``calibration`` is this run's car."""
 
     @abstractmethod
     def act(self, obs: Observation, truth) -> BrakeCommand:
-        """Decide from the latest observation. ``truth`` is for oracles only."""
+        """Decide from the latest observation. ``truth`` is for oracles only (else None)."""

@@ -1,9 +1,9 @@
 """Closed-loop run of one scenario case with one controller; writes its outputs.
 
-Per frame: capture -> ground truth -> controller -> the command is queued and takes
-effect ``compute_latency_s`` after the frame's capture time -> traffic integrates to
-the next frame. The first warning / brake are logged at the traffic step in which
-they take effect, with the exact TTC of the critical actor at that step.
+The loop itself is ``sim.loop.ClosedLoop`` (latency, frame skipping, command queue,
+end of run). The first warning / brake are logged at the traffic step in which they
+take effect, with the exact bumper-to-bumper TTC of the critical actor at that step.
+Per-pixel TTC (the estimator's, the fence lag's) is to the camera plane instead.
 """
 
 from __future__ import annotations
@@ -12,9 +12,8 @@ import csv
 import io
 import json
 import math
-import os
 import time
-from dataclasses import asdict
+from dataclasses import asdict, is_dataclass
 from pathlib import Path
 
 import cv2
@@ -22,10 +21,13 @@ import numpy as np
 import yaml
 
 from bittc_core.atomic import write_text_atomic
-from controllers.base import BrakeCommand, Controller, Observation
+from controllers.base import Controller
 from scenarios.spec import ScenarioCase
 from sim.camera import CameraConfig
 from sim.episode import ScenarioSim
+from sim.fence_lag import FenceLagMeter
+from sim.latency import LatencyMode, parse_latency
+from sim.loop import ClosedLoop
 from sim.textures import TextureStyle
 from sim.traffic import ActuatorConfig
 from sim.video import VideoWriter, hud, ttc_overlay
@@ -34,33 +36,18 @@ SUMMARY_KEYS = (
     "scenario", "family", "controller", "seed", "threat", "collision", "impact_speed_kph",
     "relative_impact_speed_kph", "speed_reduction_kph", "min_gap_m", "t_first_warning_s",
     "ttc_at_first_warning_s", "t_first_brake_s", "ttc_at_first_brake_s", "false_alarm",
-    "end_reason", "steps", "sim_time_s", "wall_time_s",
+    "end_reason", "steps", "sim_time_s", "num_alphas", "thresholds_s", "latency_mode", "latency_ms_mean",
+    "latency_ms_p95", "wait_ms_mean", "actuator_delay_ms", "frames_processed", "frames_skipped",
 )  # fmt: skip
+#: per threshold [s]: the critical actor's exact camera-plane TTC when the fence first covered half of it,
+#: and the fence's lag (threshold minus that TTC); see sim.fence_lag
+LAG_KEYS = ("fence_cover_ttc_s", "fence_lag_s")
 
 
 def _r(x: float | None, nd: int = 4) -> float | None:
     if x is None or not math.isfinite(x):
         return None
     return round(float(x), nd)
-
-
-class _CommandQueue:
-    """Commands in the order they take effect; the latest one in effect wins."""
-
-    def __init__(self) -> None:
-        self._pending: list[tuple[float, BrakeCommand]] = []
-        self.active = BrakeCommand()
-
-    def push(self, t_effect_s: float, cmd: BrakeCommand) -> None:
-        self._pending.append((t_effect_s, cmd))
-
-    def update(self, t_s: float) -> bool:
-        """Make due commands active; True when the active command changed."""
-        changed = False
-        while self._pending and self._pending[0][0] <= t_s + 1e-9:
-            self.active = self._pending.pop(0)[1]
-            changed = True
-        return changed
 
 
 def run_case(
@@ -72,76 +59,35 @@ def run_case(
     video: bool = False,
     actuator: ActuatorConfig | None = None,
     textures: TextureStyle = TextureStyle(),
+    latency: LatencyMode | None = None,
 ) -> dict:
     """Run ``case`` closed loop; returns the summary. With ``out_dir`` writes
-    summary.json, trace.csv, config.yaml (and camera.mp4 with ``video``)."""
+    summary.json, trace.csv, config.yaml, timing.json (and camera.mp4 with ``video``).
+
+    ``latency`` defaults to ``measured`` for controllers that need the camera and
+    ``fixed:0`` for the others. With a fixed or profile latency, summary.json,
+    trace.csv and config.yaml are the same bytes for the same seed; wall-clock figures
+    go to timing.json."""
     wall0 = time.perf_counter()
+    latency = latency or default_latency(controller)
     render = controller.needs_camera or video
     sim = ScenarioSim(case, camera, seed, render=render, actuator=actuator, textures=textures)
     writer = VideoWriter(out_dir / "camera.mp4", camera.fps_hz) if (video and out_dir is not None) else None
+    lag = FenceLagMeter() if controller.needs_camera else None
+    hook = None
+    if writer is not None:
+        scale = writer.scale_for(camera.width_px)
+        hook = lambda rec, frame: writer.write(_video_frame(frame, rec, loop, scale))  # noqa: E731
+    loop = ClosedLoop(sim, latency, num_alphas=controller.num_alphas, pairs=controller.needs_camera,
+                      frame_stride=controller.frame_stride, on_capture=hook, lag_meter=lag)  # fmt: skip
     try:
-        controller.reset()
-        truth = sim.reset()
-        queue = _CommandQueue()
-        first_warn = first_brake = None  # (t_s, ttc_s)
-        rows: list[dict] = []
-        prev = None
-        frame = sim.capture() if render else None
-        steps = 0
-        end_reason = None
-        while True:
-            if frame is not None and prev is not None:
-                truth.gt = sim.ground_truth(prev, frame)
-            obs = Observation(sim.t_s, float(sim.ego.speed), frame.image if frame is not None else None,
-                              prev.image if prev is not None else None, camera.dt_s)  # fmt: skip
-            cmd = controller.act(obs, truth if controller.uses_ground_truth else None)
-            if not (math.isfinite(cmd.decel_mps2) and cmd.decel_mps2 >= 0):
-                raise ValueError(f"controller {controller.name!r} returned decel_mps2 = {cmd.decel_mps2}")
-            queue.push(sim.t_s + max(cmd.compute_latency_s, 0.0), cmd)
-            for k in range(sim.n_sub):
-                if queue.update(sim.t_s):
-                    a = queue.active
-                    if a.warning and first_warn is None:
-                        first_warn = (sim.t_s, _crit_ttc(sim))
-                    if a.decel_mps2 > 0 and first_brake is None:
-                        first_brake = (sim.t_s, _crit_ttc(sim))
-                if k == 0:  # the row shows the command in effect at the frame's capture time
-                    rows.append(_trace_row(sim, truth, queue.active, cmd))
-                    if writer is not None and frame is not None:
-                        writer.write(_video_frame(frame.image, truth, queue.active, sim, writer.scale_for(camera.width_px)))
-                sim.substep(queue.active.decel_mps2)
-            steps += 1
-            truth = sim.truth()
-            end_reason = sim.done(truth)
-            if end_reason:
-                break
-            if render:
-                prev, frame = frame, sim.capture()
-        col = sim.collision
-        any_alert = first_warn is not None or first_brake is not None
-        summary = {
-            "scenario": case.name,
-            "family": case.family,
-            "controller": controller.name,
-            "seed": seed,
-            "threat": case.threat,
-            "collision": col is not None,
-            "impact_speed_kph": _r(col.impact_speed_mps * 3.6) if col else None,
-            "relative_impact_speed_kph": _r(col.relative_impact_speed_mps * 3.6) if col else None,
-            "speed_reduction_kph": _r(case.ego.speed_kph - (col.impact_speed_mps * 3.6 if col else sim.ego.speed * 3.6)),
-            "min_gap_m": _r(sim.min_gap_m),
-            "t_first_warning_s": _r(first_warn[0]) if first_warn else None,
-            "ttc_at_first_warning_s": _r(first_warn[1]) if first_warn else None,
-            "t_first_brake_s": _r(first_brake[0]) if first_brake else None,
-            "ttc_at_first_brake_s": _r(first_brake[1]) if first_brake else None,
-            "false_alarm": (not case.threat) and any_alert,
-            "end_reason": end_reason,
-            "steps": steps,
-            "sim_time_s": _r(sim.t_s),
-            "wall_time_s": round(time.perf_counter() - wall0, 3),
-        }
+        loop.drive(controller)
+        summary = summarize(case, controller, seed, loop, latency, lag)
         if out_dir is not None:
-            _write_outputs(out_dir, case, controller, camera, seed, sim.actuator, summary, rows, video, textures)
+            timing = {"wall_time_s": round(time.perf_counter() - wall0, 3),
+                      **{k: round(v, 4) for k, v in sorted(loop.timing.items())}}  # fmt: skip
+            _write_outputs(out_dir, case, controller, camera, seed, sim.actuator, summary, _trace_rows(loop), video,
+                           textures, latency, timing)  # fmt: skip
             if writer is not None:
                 writer.close()
         return summary
@@ -153,45 +99,113 @@ def run_case(
         sim.close()
 
 
-def _crit_ttc(sim: ScenarioSim) -> float | None:
-    c = sim.truth().critical
-    return c.ttc_s if c is not None and math.isfinite(c.ttc_s) else None
+def default_latency(controller: Controller) -> LatencyMode:
+    """``measured`` for controllers that look at the camera, ``fixed:0`` otherwise."""
+    return parse_latency("measured" if controller.needs_camera else "fixed:0")
 
 
-def _trace_row(sim: ScenarioSim, truth, active: BrakeCommand, decided: BrakeCommand) -> dict:
-    row = {
-        "t_s": f"{sim.t_s:.3f}",
-        "ego_speed_kph": f"{sim.ego.speed * 3.6:.4f}",
-        "ego_accel_mps2": f"{sim.ego.current_accel_mps2:.4f}",
-        "critical_actor": truth.critical.instance if truth.critical else "",
-        "critical_ttc_s": f"{truth.critical.ttc_s:.4f}" if truth.critical and math.isfinite(truth.critical.ttc_s) else "",
-        "warning": int(active.warning),
-        "brake_cmd_mps2": f"{active.decel_mps2:.3f}",
-        "decided_brake_mps2": f"{decided.decel_mps2:.3f}",
-        "compute_latency_ms": f"{decided.compute_latency_s * 1e3:.2f}",
+def summarize(case: ScenarioCase, controller: Controller, seed: int, loop: ClosedLoop, latency: LatencyMode,
+              lag: FenceLagMeter | None) -> dict:  # fmt: skip
+    sim = loop.sim
+    col = sim.collision
+    first_warn, first_brake = loop.first_warning, loop.first_brake
+    lat_ms = np.array([r.latency_s for r in loop.processed], dtype=np.float64) * 1e3
+    wait_ms = np.array([r.wait_s for r in loop.processed], dtype=np.float64) * 1e3
+    thresholds = getattr(getattr(controller, "cfg", None), "thresholds_s", None)
+    summary = {
+        "scenario": case.name,
+        "family": case.family,
+        "controller": controller.name,
+        "seed": seed,
+        "threat": case.threat,
+        "collision": col is not None,
+        "impact_speed_kph": _r(col.impact_speed_mps * 3.6) if col else None,
+        "relative_impact_speed_kph": _r(col.relative_impact_speed_mps * 3.6) if col else None,
+        "speed_reduction_kph": _r(case.ego.speed_kph - (col.impact_speed_mps * 3.6 if col else sim.ego.speed * 3.6)),
+        "min_gap_m": _r(sim.min_gap_m),
+        "t_first_warning_s": _r(first_warn[0]) if first_warn else None,
+        "ttc_at_first_warning_s": _r(first_warn[1]) if first_warn else None,
+        "t_first_brake_s": _r(first_brake[0]) if first_brake else None,
+        "ttc_at_first_brake_s": _r(first_brake[1]) if first_brake else None,
+        "false_alarm": (not case.threat) and (first_warn is not None or first_brake is not None),
+        "end_reason": loop.end_reason,
+        "steps": len(loop.records),
+        "sim_time_s": _r(sim.t_s),
+        "num_alphas": controller.num_alphas,
+        "thresholds_s": list(thresholds) if thresholds is not None else [],
+        "latency_mode": str(latency),
+        "latency_ms_mean": _r(float(lat_ms.mean()), 3) if lat_ms.size else None,
+        "latency_ms_p95": _r(float(np.percentile(lat_ms, 95)), 3) if lat_ms.size else None,
+        "wait_ms_mean": _r(float(wait_ms.mean()), 3) if wait_ms.size else None,
+        "actuator_delay_ms": _r(sim.actuator.delay_s * 1e3, 3),
+        "frames_processed": len(loop.processed),
+        "frames_skipped": sum(r.status == "skipped" for r in loop.records),
     }
-    for a in truth.actors:
-        row[f"gap_m_actor{a.instance}"] = f"{a.gap_m:.4f}"
-    return row
+    if lag is not None:
+        summary["fence_cover_ttc_s"] = lag.cover_ttc()
+        summary["fence_lag_s"] = lag.lag_s()
+    return summary
 
 
-def _video_frame(image: np.ndarray, truth, active: BrakeCommand, sim: ScenarioSim, scale: int) -> np.ndarray:
-    img = image
-    if truth.gt is not None:
-        img = ttc_overlay(image, truth.gt.tau_s, truth.gt.valid, truth.gt.instance)
+def _trace_rows(loop: ClosedLoop) -> list[dict]:
+    rows = []
+    for rec in loop.records:
+        truth, active = rec.truth, rec.active
+        crit = truth.critical
+        row = {
+            "t_s": f"{rec.t_s:.3f}",
+            "ego_speed_kph": f"{rec.ego_speed_mps * 3.6:.4f}",
+            "ego_accel_mps2": f"{rec.ego_accel_mps2:.4f}",
+            "critical_actor": crit.instance if crit else "",
+            "critical_ttc_s": f"{crit.ttc_s:.4f}" if crit and math.isfinite(crit.ttc_s) else "",
+            "warning": int(active.warning),
+            "brake_cmd_mps2": f"{active.decel_mps2:.3f}",
+            "frame": rec.status,
+            "latency_ms": f"{rec.latency_s * 1e3:.2f}" if rec.latency_s is not None else "",
+            "wait_ms": f"{rec.wait_s * 1e3:.2f}" if rec.wait_s is not None else "",
+            "decided_warning": int(rec.decided.warning) if rec.decided else "",
+            "decided_brake_mps2": f"{rec.decided.decel_mps2:.3f}" if rec.decided else "",
+        }
+        for k, v in rec.fence_cover.items():
+            row[f"crit_inside_{k}s"] = f"{v:.3f}"
+        if rec.decided is not None:
+            for k, v in rec.decided.telemetry.items():
+                if k != "estimator_ms" or not loop.latency.deterministic:
+                    row[k] = v
+        for a in truth.actors:
+            row[f"gap_m_actor{a.instance}"] = f"{a.gap_m:.4f}"
+        rows.append(row)
+    return rows
+
+
+def _video_frame(frame, rec, loop: ClosedLoop, scale: int) -> np.ndarray:
+    from sim.video import geofence_overlay
+
+    img, active, truth = frame.image, rec.active, rec.truth
+    view = active.view
+    if view is not None:
+        img = geofence_overlay(img, view)
+    else:
+        gt = loop.ground_truth(rec.index)
+        if gt is not None:
+            img = ttc_overlay(img, gt.tau_s, gt.valid, gt.instance)
     img = cv2.resize(img, (img.shape[1] * scale, img.shape[0] * scale), interpolation=cv2.INTER_NEAREST)
     crit = truth.critical
     ttc = f"{crit.ttc_s:.2f} s" if crit and math.isfinite(crit.ttc_s) else "inf"
     gap = f"{crit.gap_m:.1f} m" if crit else "-"
+    stage = "FULL BRAKE" if active.decel_mps2 >= 8.9 else "BRAKE" if active.decel_mps2 > 0 else "WARNING" if active.warning else "-"
+    last = next((r for r in reversed(loop.records) if r.latency_s is not None), None)
+    lat = f"{last.latency_s * 1e3:.0f} ms" if last is not None else "-"
     lines = [
-        f"t {sim.t_s:5.2f} s   speed {sim.ego.speed * 3.6:5.1f} km/h",
-        f"gap {gap}   TTC {ttc}",
-        f"brake {active.decel_mps2:.1f} m/s2" + ("   WARNING" if active.warning else ""),
+        f"t {rec.t_s:5.2f} s   speed {rec.ego_speed_mps * 3.6:5.1f} km/h",
+        f"gap {gap}   exact TTC {ttc}",
+        f"{stage}  {active.decel_mps2:.1f} m/s2   latency {lat}",
     ]
     return hud(img, lines, active.warning or active.decel_mps2 > 0)
 
 
-def _write_outputs(out_dir: Path, case, controller, camera, seed, actuator, summary, rows, video, textures) -> None:
+def _write_outputs(out_dir: Path, case, controller, camera, seed, actuator, summary, rows, video, textures, latency,
+                   timing) -> None:  # fmt: skip
     out_dir.mkdir(parents=True, exist_ok=True)
     buf = io.StringIO()
     fieldnames = list(rows[0].keys()) if rows else ["t_s"]
@@ -202,9 +216,12 @@ def _write_outputs(out_dir: Path, case, controller, camera, seed, actuator, summ
     w = csv.DictWriter(buf, fieldnames=fieldnames, lineterminator="\n", restval="")
     w.writeheader()
     w.writerows(rows)
+    cfg = getattr(controller, "cfg", None)
     config = {
         "scenario": case.to_dict(),
         "controller": controller.name,
+        "controller_config": _plain(asdict(cfg)) if is_dataclass(cfg) else None,
+        "latency": str(latency),
         "seed": seed,
         "camera": asdict(camera),
         "textures": asdict(textures),
@@ -213,4 +230,14 @@ def _write_outputs(out_dir: Path, case, controller, camera, seed, actuator, summ
     }
     write_text_atomic(out_dir / "trace.csv", buf.getvalue())
     write_text_atomic(out_dir / "config.yaml", yaml.safe_dump(config, sort_keys=False))
+    write_text_atomic(out_dir / "timing.json", json.dumps(timing, indent=2) + "\n")
     write_text_atomic(out_dir / "summary.json", json.dumps(summary, indent=2) + "\n")
+
+
+def _plain(x):
+    """Tuples -> lists, for YAML."""
+    if isinstance(x, dict):
+        return {k: _plain(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_plain(v) for v in x]
+    return x

@@ -1,4 +1,4 @@
-"""Run several scenario cases and tabulate their outcomes."""
+"""Run several scenario cases with one controller and tabulate their outcomes."""
 
 from __future__ import annotations
 
@@ -7,49 +7,77 @@ import io
 import json
 from pathlib import Path
 
-import controllers
 from bittc_core.atomic import write_text_atomic
+from controllers.base import Controller
 from scenarios.spec import ScenarioCase
 from sim.camera import CameraConfig
+from sim.latency import LatencyMode
 from sim.runner import SUMMARY_KEYS, run_case
 from sim.textures import TextureStyle
 
 TABLE_COLUMNS = (
     ("scenario", 28), ("threat", 6), ("collision", 9), ("impact_speed_kph", 8), ("min_gap_m", 8),
-    ("ttc_at_first_warning_s", 8), ("ttc_at_first_brake_s", 8), ("false_alarm", 5),
+    ("ttc_at_first_warning_s", 8), ("ttc_at_first_brake_s", 8), ("false_alarm", 5), ("latency_ms_mean", 7),
+    ("latency_ms_p95", 7), ("lag", 18),
 )  # fmt: skip
 HEADERS = {"impact_speed_kph": "impact", "min_gap_m": "gap_m", "ttc_at_first_warning_s": "ttc_warn",
-           "ttc_at_first_brake_s": "ttc_brk", "false_alarm": "FA"}  # fmt: skip
+           "ttc_at_first_brake_s": "ttc_brk", "false_alarm": "FA", "latency_ms_mean": "lat_ms",
+           "latency_ms_p95": "p95_ms", "lag": "fence lag [s]"}  # fmt: skip
 
 
-def run_cases(cases: list[ScenarioCase], controller: str, camera: CameraConfig, seed: int, out_dir: Path,
-              video: bool = False, progress: bool = True, textures: TextureStyle = TextureStyle()) -> list[dict]:  # fmt: skip
-    """Run every case into ``out_dir/<case>/`` and write ``out_dir/summary.{csv,json}``."""
+def run_cases(cases: list[ScenarioCase], controller: Controller, camera: CameraConfig, seed: int, out_dir: Path,
+              video: bool = False, progress: bool = True, textures: TextureStyle = TextureStyle(),
+              latency: LatencyMode | None = None) -> list[dict]:  # fmt: skip
+    """Run every case into ``out_dir/<case>/`` with the one ``controller`` (reset per run)
+    and write ``out_dir/summary.{csv,json}``."""
     summaries = []
     it = cases
     if progress and len(cases) > 1:
         from tqdm import tqdm
 
-        it = tqdm(cases, desc=f"{controller}", unit="run", leave=False)
+        it = tqdm(cases, desc=controller.name, unit="run", leave=False)
     for case in it:
-        summaries.append(run_case(case, controllers.make(controller), camera, seed, out_dir / case.name, video=video,
-                                  textures=textures))
+        summaries.append(run_case(case, controller, camera, seed, out_dir / case.name, video=video,
+                                  textures=textures, latency=latency))  # fmt: skip
     write_table(out_dir, summaries)
     return summaries
 
 
+def _csv_value(v):
+    if v is None:
+        return ""
+    if isinstance(v, (list, tuple)):
+        return " ".join(f"{x:g}" for x in v)
+    if isinstance(v, dict):
+        return " ".join(f"{k}:{'' if x is None else x}" for k, x in v.items())
+    return v
+
+
 def write_table(out_dir: Path, summaries: list[dict]) -> None:
+    keys = list(SUMMARY_KEYS) + [k for k in ("fence_lag_s",) if any(k in s for s in summaries)]
     buf = io.StringIO()
-    w = csv.DictWriter(buf, fieldnames=list(SUMMARY_KEYS), lineterminator="\n")
+    w = csv.DictWriter(buf, fieldnames=keys, lineterminator="\n")
     w.writeheader()
     for s in summaries:
-        w.writerow({k: ("" if s[k] is None else s[k]) for k in SUMMARY_KEYS})
+        w.writerow({k: _csv_value(s.get(k)) for k in keys})
     write_text_atomic(out_dir / "summary.csv", buf.getvalue())
     write_text_atomic(out_dir / "summary.json", json.dumps(summaries, indent=2) + "\n")
 
 
-def format_table(summaries: list[dict]) -> str:
-    def cell(v) -> str:
+def _lag_cell(s: dict) -> str | None:
+    lag = s.get("fence_lag_s")
+    if not lag:
+        return None
+    return "/".join("-" if v is None else f"{v:.2f}" for v in lag.values())
+
+
+def format_table(summaries: list[dict], markdown: bool = False) -> str:
+    """One line per run and a totals line. ``fence lag``: per threshold, smallest first,
+    the threshold minus the critical actor's exact camera-plane TTC when the fence first
+    covered half of it ('-': never)."""
+
+    def cell(s: dict, k: str) -> str:
+        v = _lag_cell(s) if k == "lag" else s.get(k)
         if v is None:
             return "-"
         if isinstance(v, bool):
@@ -58,14 +86,17 @@ def format_table(summaries: list[dict]) -> str:
             return f"{v:.2f}"
         return str(v)
 
-    head = " ".join(f"{HEADERS.get(k, k):<{n}}" for k, n in TABLE_COLUMNS)
-    lines = [head, "-" * len(head)]
-    for s in summaries:
-        lines.append(" ".join(f"{cell(s[k]):<{n}}" for k, n in TABLE_COLUMNS))
+    cols = [(k, n) for k, n in TABLE_COLUMNS if k != "lag" or any(s.get("fence_lag_s") for s in summaries)]
     threats = [s for s in summaries if s["threat"]]
     benign = [s for s in summaries if not s["threat"]]
     avoided = sum(not s["collision"] for s in threats)
     fas = sum(s["false_alarm"] for s in benign)
-    lines.append("-" * len(head))
-    lines.append(f"threats avoided: {avoided}/{len(threats)}   false alarms: {fas}/{len(benign)}")
-    return "\n".join(lines)
+    total = f"threats avoided: {avoided}/{len(threats)}   false alarms: {fas}/{len(benign)}"
+    if markdown:
+        lines = ["| " + " | ".join(HEADERS.get(k, k) for k, _ in cols) + " |", "|" + "---|" * len(cols)]
+        lines += ["| " + " | ".join(cell(s, k) for k, _ in cols) + " |" for s in summaries]
+        return "\n".join(lines + ["", total])
+    head = " ".join(f"{HEADERS.get(k, k):<{n}}" for k, n in cols)
+    lines = [head, "-" * len(head)]
+    lines += [" ".join(f"{cell(s, k):<{n}}" for k, n in cols) for s in summaries]
+    return "\n".join(lines + ["-" * len(head), total])

@@ -24,6 +24,29 @@ def ttc_overlay(image_rgb: np.ndarray, tau_s: np.ndarray, valid: np.ndarray, ins
     return out.astype(np.uint8)
 
 
+def fence_colours(k: int) -> np.ndarray:
+    """(K, 3) RGB, the smallest threshold red through yellow to the largest in cyan."""
+    t = np.linspace(0.0, 1.0, k) if k > 1 else np.zeros(1)
+    return np.stack([np.clip(2 - 2 * t, 0, 1), np.clip(2 * t, 0, 1), np.clip(2 * t - 1, 0, 1)], axis=-1) * 255.0
+
+
+def geofence_overlay(image_rgb: np.ndarray, view, alpha: float = 0.45) -> np.ndarray:
+    """A controller's geofences over its frame: each pixel in the colour of the smallest
+    fence it is inside (``fence_colours``), the ego's corridor outlined in white and the
+    pixels that counted as in-path evidence in magenta. ``view``: a
+    ``controllers.base.GeofenceView`` (thresholds sorted increasing)."""
+    out = image_rgb.astype(np.float32).copy()
+    colours = fence_colours(len(view.thresholds_s))
+    for i in range(len(view.thresholds_s) - 1, -1, -1):  # smaller fences paint over larger ones
+        m = view.maps[i] > 0.5
+        out[m] = (1 - alpha) * out[m] + alpha * colours[i]
+    out[view.counted] = 0.3 * out[view.counted] + 0.7 * np.array([255.0, 0.0, 255.0])
+    out = out.astype(np.uint8)
+    contours, _ = cv2.findContours(view.corridor.astype(np.uint8), cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
+    cv2.drawContours(out, contours, -1, (255, 255, 255), 1)
+    return out
+
+
 # one-pixel offsets of the black outline drawn under the white HUD text: a thicker
 # stroke would not do, OpenCV widens each glyph's advance with the thickness, so a
 # thick outline drifts right of the thin text along the line

@@ -6,9 +6,9 @@ import argparse
 import json
 from pathlib import Path
 
-import controllers
 import scenarios
 from bittc_core.cli.common import MAX_SEED, non_negative_int, parse_size, texture_style, writable_dir
+from bittc_core.cli.loop_flags import add_controller_flags, controller_from_args
 from bittc_core.errors import CliError
 from sim.camera import CameraConfig
 
@@ -19,7 +19,7 @@ def add_parser(sub) -> argparse.ArgumentParser:
                        "One case writes DIR/summary.json, trace.csv, config.yaml (and camera.mp4); a sweep writes one "
                        "such folder per case plus DIR/summary.csv.")  # fmt: skip
     p.add_argument("scenario", help="bundled name (see `bittc scenarios`) or path to a YAML file")
-    p.add_argument("--controller", required=True, choices=sorted(controllers.REGISTRY))
+    add_controller_flags(p)
     p.add_argument("--out", required=True, help="output directory")
     p.add_argument("--seed", type=int, default=0, help="scenery/appearance/traffic seed (default 0)")
     p.add_argument("--video", action="store_true", help="also write camera.mp4 with the exact TTC overlay and a HUD")
@@ -72,15 +72,14 @@ def run(args) -> int:
     camera = camera_from_args(args)
     textures = textures_from_args(args)
     cases = scenarios.resolve(args.scenario)
+    controller, latency = controller_from_args(args, camera)
     out = writable_dir(args.out)
     if len(cases) == 1:
-        s = run_case(cases[0], controllers.make(args.controller), camera, args.seed, out, video=args.video,
-                     textures=textures)
-        print(json.dumps({k: v for k, v in s.items()}, indent=2))
+        s = run_case(cases[0], controller, camera, args.seed, out, video=args.video, textures=textures, latency=latency)
+        print(json.dumps(s, indent=2))
     else:
-        summaries = run_cases(cases, args.controller, camera, args.seed, out, video=args.video, textures=textures)
+        summaries = run_cases(cases, controller, camera, args.seed, out, video=args.video, textures=textures,
+                              latency=latency)  # fmt: skip
         print(format_table(summaries))
     print(f"wrote {Path(out)}")
     return 0
-
-

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import argparse
 
-import controllers
 import scenarios
 from bittc_core.cli.common import MAX_SEED, non_negative_int, writable_dir
+from bittc_core.cli.loop_flags import add_controller_flags, controller_from_args
 from bittc_core.cli.run_cmd import add_camera_flags, camera_from_args, textures_from_args
 
 
@@ -14,10 +14,11 @@ def add_parser(sub) -> argparse.ArgumentParser:
     p = sub.add_parser("suite", help="run the bundled scenario suite and print a summary table",
                        description="Runs every case of the bundled scenarios (or --scenarios A,B,...) and writes "
                        "DIR/summary.csv, DIR/summary.json and one folder per case.")  # fmt: skip
-    p.add_argument("--controller", default="oracle", choices=sorted(controllers.REGISTRY))
+    add_controller_flags(p, default="oracle")
     p.add_argument("--out", required=True, help="output directory")
     p.add_argument("--scenarios", default=None, help="comma-separated names/families (default: all bundled)")
     p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--markdown", action="store_true", help="print the table as Markdown (as in the README)")
     p.add_argument("--video", action="store_true")
     add_camera_flags(p)
     return p
@@ -33,8 +34,10 @@ def run(args) -> int:
         cases = [c for name in args.scenarios.split(",") for c in scenarios.resolve(name.strip())]
     else:
         cases = list(scenarios.bundled().cases.values())
+    controller, latency = controller_from_args(args, camera)
     out = writable_dir(args.out)
-    summaries = run_cases(cases, args.controller, camera, args.seed, out, video=args.video, textures=textures)
-    print(format_table(summaries))
+    summaries = run_cases(cases, controller, camera, args.seed, out, video=args.video, textures=textures,
+                          latency=latency)
+    print(format_table(summaries, markdown=args.markdown))
     print(f"wrote {out}/summary.csv")
     return 0

@@ -1,0 +1,77 @@
+"""Controller and latency flags shared by `bittc run` and `bittc suite`."""
+
+from __future__ import annotations
+
+import argparse
+
+from bittc_core.errors import CliError, ConfigError
+
+
+def add_controller_flags(p: argparse.ArgumentParser, default: str | None = None) -> None:
+    import controllers
+
+    p.add_argument("--controller", required=default is None, default=default,
+                   help=f"{', '.join(controllers.REGISTRY)}, or module:Class for your own Controller subclass"
+                   + (f" (default {default})" if default else ""))
+    g = p.add_mutually_exclusive_group()
+    g.add_argument("--num-alphas", type=int, default=None, metavar="K",
+                   help="geofence/flow: K thresholds, uniform in log TTC over 0.8-2.8 s (K = 1: 1.5 s; default 4)")
+    g.add_argument("--ttc-thresholds", type=float, nargs="+", default=None, metavar="S",
+                   help="geofence/flow: explicit camera-plane TTC thresholds [s], any order")
+    p.add_argument("--latency", default=None, metavar="MODE",
+                   help="measured, fixed:MS or profile:NAME (`bittc profiles`); default measured for "
+                        "camera controllers, fixed:0 otherwise")
+    p.add_argument("--weights", default=None, help="geofence: network weights (default: the shipped ones)")
+    p.add_argument("--frame-stride", type=int, default=1, metavar="N",
+                   help="geofence/flow: pair each frame with the one N frames before (default 1)")
+
+
+def controller_from_args(args, camera):
+    """-> (controller, latency mode), every flag checked and the controller reset once with
+    this camera (so a frame interval the weights were not trained for is refused before
+    anything is written)."""
+    import controllers
+    from controllers.base import Calibration
+    from controllers.geofence import check_thresholds, default_thresholds
+    from sim.latency import parse_latency
+    from sim.vehicles import EGO_SIZE_M
+
+    name = args.controller
+    settings = {}
+    takes_fences = name in controllers.ESTIMATOR_CONTROLLERS
+    try:
+        if args.num_alphas is not None:
+            settings["thresholds_s"] = default_thresholds(args.num_alphas)
+        if args.ttc_thresholds is not None:
+            settings["thresholds_s"] = check_thresholds(args.ttc_thresholds)
+    except ConfigError as e:
+        flag = "--num-alphas" if args.num_alphas is not None else "--ttc-thresholds"
+        raise CliError(f"{flag}: {e}") from None
+    if args.frame_stride != 1:
+        if not 1 <= args.frame_stride <= 10:
+            raise CliError(f"--frame-stride {args.frame_stride}: must be in [1, 10]")
+        settings["frame_stride"] = args.frame_stride
+    if args.weights is not None:
+        if name != "geofence":
+            raise CliError(f"--weights applies to the geofence controller, not {name!r}")
+        settings["weights"] = args.weights
+    if settings and name in controllers.REGISTRY and not takes_fences:
+        raise CliError(f"--num-alphas / --ttc-thresholds / --frame-stride apply to "
+                       f"{' and '.join(controllers.ESTIMATOR_CONTROLLERS)}, not {name!r}")
+    try:
+        latency = parse_latency(args.latency) if args.latency is not None else None
+    except ConfigError as e:
+        raise CliError(f"--latency: {e}") from None
+    try:
+        ctrl = controllers.make(name, **settings)
+    except ConfigError as e:
+        raise CliError(f"--controller {name}: {e}") from None
+    try:
+        ctrl.reset(Calibration.from_camera(camera, EGO_SIZE_M))
+    except ConfigError as e:
+        raise CliError(f"--fps / --frame-stride: {e}") from None
+    if latency is None:
+        from sim.runner import default_latency
+
+        latency = default_latency(ctrl)
+    return ctrl, latency

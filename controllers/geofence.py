@@ -1,0 +1,273 @@
+"""Geofence controllers: staged AEB driven by an estimator's K temporal geofences.
+
+Deployable: reads the two frames of its pair, the ego's own speed and the car's
+calibration (``controllers.base.Calibration``); never ground truth. The estimator is any
+``bittc_core.estimator.Estimator`` (``geofence``: the shipped network; ``flow``: DIS +
+affine expansion), built once and reset per run.
+
+Each job, for every fence tau_i (camera-plane TTC [s] from the latest frame; the
+estimator's map p_i = p(0 < tau <= tau_i)):
+
+1. **Inside**: pixels with p_i > ``prob_inside``.
+2. **Not the road**: the static ground ahead has a finite TTC, tau_ground(row) =
+   Z(row) / (s cos p) (``controllers.road``; at 50 km/h the road within about 33 m lies
+   inside a 2.4 s fence). A pixel counts only on rows whose ground lies clearly outside
+   the fence, tau_ground(row) > ``ground_margin`` * tau_i: an obstacle standing on the
+   road reaches the camera plane sooner than the road under its upper part. At
+   standstill tau_ground is +inf: every inside pixel counts (a static world is at
+   tau = inf and inside no fence).
+3. **In the corridor**: the ego's width plus ``corridor_margin_m`` on each side,
+   straight ahead, projected at the depth Z_i = s cos p tau_i of a static point on the
+   fence. An actor inside the fence is at most that far if it does not close faster
+   than the ego drives, so an adjacent-lane car (static, slower or same-direction) lies
+   outside these columns; an oncoming car in the next lane closes faster and could
+   enter them only when its closing speed exceeds about 2.4x the ego's (3.5 m lanes).
+   A car cutting in enters the columns as it enters the lane.
+4. **Standing on the road, big enough**: an obstacle inside the fence stands on the
+   road nearer than the fence's ground boundary, so its counted pixels reach down to
+   the lowest counted row; a region whose bottom ends more than ``contact_px`` rows
+   above it (the textureless sky, a far tree top) does not count. The largest such
+   8-connected region must have at least ``min_region_px`` pixels (a 1.7 m target at
+   53 m is about 6 px wide). Rows count only when the ground one row below them is
+   outside the fence too (near the horizon one row spans tens of metres).
+5. **Persistent**: the fence fires after ``persistence_frames`` consecutive jobs with
+   such a region.
+
+**From the K fences to the stages** (``controllers.stages``, thresholds in bumper-to-
+bumper TTC, as the oracle's). The estimate tau_hat is the smallest threshold whose fence
+fires (the true TTC is at most that). The network's tau counts to the camera plane; the
+front bumper lies ``calibration.bumper_ahead_m`` ahead of it, which a static obstacle
+covers in d / s seconds, so a stage threshold T becomes the camera-plane threshold
+T + d / s. Each stage is assigned the fence whose threshold is nearest to that in log
+tau, and is reached when tau_hat <= the assigned threshold. With K = 1 every stage
+shares the one fence: warn and brake on it. The required deceleration for a static
+obstacle, s / (2 (tau_hat - d / s)), picks partial or full braking at the partial
+stage. Braking latches; it is released after ``release_frames`` jobs with no fence
+firing. Below ``min_speed_mps`` the controller neither warns nor brakes.
+
+**Thresholds**: explicit (any order, each within the estimator's trained range), or
+``default_thresholds(K)``: K values spaced uniformly in log tau over
+``DEFAULT_TAU_RANGE_S`` (0.8-2.8 s; K = 1: their geometric mean, 1.5 s). With a frame
+stride n the pair spans n frame intervals; a threshold tau then asks the estimator for
+the same eta = tau / (tau + n dt) as tau * dt_est / (n dt) at its own trained interval.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import cv2
+import numpy as np
+
+from bittc_core.errors import ConfigError
+from controllers.base import BrakeCommand, Calibration, Controller, GeofenceView, Observation
+from controllers.road import corridor_columns, ground_ttc_per_row, static_depth_m
+from controllers.stages import StageConfig, StagedBrake
+
+DEFAULT_TAU_RANGE_S = (0.8, 2.8)  # [s] camera-plane TTC spanned by default_thresholds
+MAX_THRESHOLDS = 64
+
+
+def default_thresholds(num_alphas: int) -> tuple[float, ...]:
+    """K thresholds [s], uniform in log tau over DEFAULT_TAU_RANGE_S (K = 1: the geometric mean)."""
+    if isinstance(num_alphas, bool) or not isinstance(num_alphas, int) or not 1 <= num_alphas <= MAX_THRESHOLDS:
+        raise ConfigError(f"number of thresholds K = {num_alphas!r}: must be an integer in [1, {MAX_THRESHOLDS}]")
+    lo, hi = (math.log(t) for t in DEFAULT_TAU_RANGE_S)
+    if num_alphas == 1:
+        return (round(math.exp((lo + hi) / 2), 4),)
+    return tuple(round(math.exp(lo + (hi - lo) * i / (num_alphas - 1)), 4) for i in range(num_alphas))
+
+
+def check_thresholds(thresholds_s) -> tuple[float, ...]:
+    """Finite, > 0, no duplicates, 1..MAX_THRESHOLDS of them; any order."""
+    try:
+        thr = tuple(float(t) for t in thresholds_s)
+    except (TypeError, ValueError):
+        raise ConfigError(f"thresholds {thresholds_s!r}: expected a list of numbers [s]") from None
+    if not 1 <= len(thr) <= MAX_THRESHOLDS:
+        raise ConfigError(f"thresholds {list(thr)}: give 1 to {MAX_THRESHOLDS} values [s]")
+    for t in thr:
+        if not math.isfinite(t) or t <= 0:
+            raise ConfigError(f"threshold {t!r} s: thresholds must be finite and > 0")
+    dup = sorted({t for t in thr if thr.count(t) > 1})
+    if dup:
+        raise ConfigError(f"threshold {dup[0]:g} s is given twice")
+    return thr
+
+
+@dataclass(frozen=True)
+class GeofenceConfig:
+    thresholds_s: tuple[float, ...] = field(default_factory=lambda: default_thresholds(4))  # [s] camera plane
+    stages: StageConfig = field(default_factory=StageConfig)  # bumper-to-bumper TTC stages
+    prob_inside: float = 0.5  # [-] a pixel is inside a fence above this probability
+    ground_margin: float = 1.25  # [-] count rows with tau_ground > margin * tau_i
+    corridor_margin_m: float = 0.25  # [m] beyond the ego's half width, each side
+    min_region_px: int = 6  # [px] smallest connected in-path region
+    contact_px: int = 2  # [px] a region's bottom lies at most this far above the lowest counted row
+    persistence_frames: int = 2  # [jobs] consecutive jobs before a fence fires
+    release_frames: int = 3  # [jobs] without any fence firing before braking is released
+    min_speed_mps: float = 1.0  # [m/s] below this: no warning, no braking
+    frame_stride: int = 1  # [frames] the pair is (k - stride, k)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "thresholds_s", check_thresholds(self.thresholds_s))
+        checks = {
+            "prob_inside": 0 < self.prob_inside < 1,
+            "ground_margin": self.ground_margin >= 1,
+            "corridor_margin_m": self.corridor_margin_m >= 0,
+            "min_region_px": self.min_region_px >= 1,
+            "contact_px": self.contact_px >= 0,
+            "persistence_frames": self.persistence_frames >= 1,
+            "release_frames": self.release_frames >= 1,
+            "min_speed_mps": self.min_speed_mps >= 0,
+            "frame_stride": isinstance(self.frame_stride, int) and 1 <= self.frame_stride <= 10,
+        }
+        for name, ok in checks.items():
+            if not ok:
+                raise ConfigError(f"GeofenceConfig.{name} = {getattr(self, name)!r} is out of range")
+
+
+def largest_region_px(mask: np.ndarray, lowest_row: int | None = None, contact_px: int = 0) -> int:
+    """Pixels of the largest 8-connected region of a (H, W) bool mask; with ``lowest_row``,
+    only regions whose bottom row is at least ``lowest_row - contact_px``."""
+    if not mask.any():
+        return 0
+    n, _, stats, _ = cv2.connectedComponentsWithStats(mask.astype(np.uint8), connectivity=8)
+    if n <= 1:
+        return 0
+    area = stats[1:, cv2.CC_STAT_AREA]
+    if lowest_row is not None:
+        bottom = stats[1:, cv2.CC_STAT_TOP] + stats[1:, cv2.CC_STAT_HEIGHT] - 1
+        area = area[bottom >= lowest_row - contact_px]
+    return int(area.max()) if area.size else 0
+
+
+def nearest_log(values: np.ndarray, target: float) -> int:
+    """Index of the value nearest to ``target`` in log scale (ties: the smaller value)."""
+    d = np.abs(np.log(values) - math.log(max(target, 1e-9)))
+    return int(np.flatnonzero(d == d.min())[0])
+
+
+class GeofenceController(Controller):
+    """Staged AEB on the geofences of ``estimator`` (see the module docstring)."""
+
+    needs_camera = True
+
+    def __init__(self, estimator, cfg: GeofenceConfig | None = None, name: str = "geofence") -> None:
+        self.estimator = estimator
+        self.cfg = cfg or GeofenceConfig()
+        self.name = name
+        self.num_alphas = len(self.cfg.thresholds_s)
+        self.frame_stride = self.cfg.frame_stride
+        self._order = np.argsort(self.cfg.thresholds_s)  # fences from the smallest threshold up
+        self._thr = np.asarray(self.cfg.thresholds_s, dtype=np.float64)[self._order]
+        self._stages = StagedBrake(self.cfg.stages)
+        self.cal: Calibration | None = None
+        self._warm = False
+
+    def estimator_thresholds(self, pair_dt_s: float) -> np.ndarray:
+        """The thresholds (sorted) in the estimator's own time base for a pair ``pair_dt_s`` apart:
+        the same eta = tau / (tau + pair_dt_s). Refused when outside its trained range."""
+        thr = self._thr * self.estimator.dt_s / pair_dt_s
+        lo, hi = self.estimator.tau_range_s
+        for t, t_est in zip(self._thr, thr):
+            if not lo * (1 - 1e-6) <= t_est <= hi * (1 + 1e-6):
+                raise ConfigError(
+                    f"frame interval {pair_dt_s:g} s (frame interval x stride {self.frame_stride}): threshold "
+                    f"{t:g} s asks the estimator for {t_est:g} s at its trained {self.estimator.dt_s:g} s, outside "
+                    f"its range [{lo:g}, {hi:g}] s")
+        return thr
+
+    def reset(self, calibration: Calibration) -> None:
+        self.cal = calibration
+        self._thr_est = self.estimator_thresholds(calibration.frame_dt_s * self.frame_stride)
+        if not self._warm:  # the first call of a network pays one-off costs no deployed system pays per frame
+            blank = np.zeros((calibration.height_px, calibration.width_px, 3), np.uint8)
+            self.estimator.geofence(blank, blank + 1, self._thr_est)
+            self._warm = True
+        if hasattr(self.estimator, "reset"):
+            self.estimator.reset()
+        self._stages.reset()
+        self._streak = np.zeros(len(self._thr), dtype=np.int64)
+        self._quiet = 0
+        self._last = BrakeCommand()
+
+    def _evidence(self, maps: np.ndarray, speed_mps: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Sorted (K, H, W) maps -> (in-path region size per fence [px], counted mask, corridor mask)."""
+        cal, c = self.cal, self.cfg
+        tau_ground = ground_ttc_per_row(cal, speed_mps)
+        half_w = cal.ego_width_m / 2 + c.corridor_margin_m
+        counted = np.zeros(maps.shape[1:], dtype=bool)
+        corridor = np.zeros(maps.shape[1:], dtype=bool)
+        sizes = np.zeros(len(self._thr), dtype=np.int64)
+        below = np.append(tau_ground[1:], tau_ground[-1])  # the ground one row lower
+        for i, tau in enumerate(self._thr):
+            rows = (tau_ground > c.ground_margin * tau) & (below > c.ground_margin * tau)
+            if speed_mps * math.cos(math.radians(cal.pitch_deg)) > 1e-6:
+                u0, u1 = corridor_columns(cal, half_w, static_depth_m(cal, speed_mps, tau))
+            else:
+                u0, u1 = 0, cal.width_px - 1
+            region = np.zeros_like(counted)
+            if u1 >= u0:
+                region[rows, u0 : u1 + 1] = True
+            mask = (maps[i] > c.prob_inside) & region
+            lowest = int(np.flatnonzero(rows).max()) if rows.any() else None
+            sizes[i] = largest_region_px(mask, lowest, c.contact_px)
+            counted |= mask
+            corridor |= region
+        return sizes, counted, corridor
+
+    def act(self, obs: Observation, truth) -> BrakeCommand:
+        if self.cal is None:
+            raise RuntimeError("call reset(calibration) before act()")
+        t0 = time.perf_counter()
+        maps = self.estimator.geofence(obs.image_prev, obs.image_latest, self._thr_est)
+        est_ms = (time.perf_counter() - t0) * 1e3
+        c, s = self.cfg, float(obs.ego_speed_mps)
+        sizes, counted, corridor = self._evidence(maps, s)
+        hits = sizes >= c.min_region_px
+        self._streak = np.where(hits, self._streak + 1, 0)
+        fired = self._streak >= c.persistence_frames
+        tau_hat = float(self._thr[np.argmax(fired)]) if fired.any() else None
+        if s < c.min_speed_mps:
+            cmd, stage = self._stages.release(), "standstill"
+        elif tau_hat is None:
+            self._quiet += 1
+            cmd = self._stages.release() if self._quiet >= c.release_frames else self._last
+            stage = "none" if self._quiet >= c.release_frames else "hold"
+        else:
+            self._quiet = 0
+            offset_s = self.cal.bumper_ahead_m / s  # camera plane -> bumper, static obstacle
+            st = c.stages
+            reached = [tau_hat <= self._thr[nearest_log(self._thr, T + offset_s)] + 1e-9
+                       for T in (st.warn_ttc_s, st.partial_ttc_s, st.full_ttc_s)]
+            required = s / (2 * max(tau_hat - offset_s, 0.05))
+            cmd = self._stages.update(*reached, required)
+            stage = "full" if reached[2] else "partial" if reached[1] else "warn" if reached[0] else "fence"
+        tel = {"estimator_ms": round(est_ms, 3), "fence_fired_s": tau_hat if tau_hat is not None else "", "stage": stage}
+        for tau, n in zip(self._thr, sizes):
+            tel[f"inpath_px_{tau:g}s"] = int(n)
+        view = GeofenceView(tuple(float(t) for t in self._thr), maps, counted, corridor)
+        self._last = BrakeCommand(cmd.decel_mps2, cmd.warning)
+        return BrakeCommand(cmd.decel_mps2, cmd.warning, telemetry=tel, view=view)
+
+
+def make_geofence(thresholds_s=None, weights: str | None = None, frame_stride: int = 1, device: str = "cpu",
+                  name: str = "geofence") -> GeofenceController:
+    """The shipped network (or ``weights``) behind the geofence controller."""
+    from bittc_core.estimator import make_estimator
+
+    cfg = GeofenceConfig(thresholds_s=tuple(thresholds_s) if thresholds_s is not None else default_thresholds(4),
+                         frame_stride=frame_stride)
+    return GeofenceController(make_estimator("bittc", weights=weights, device=device), cfg, name=name)
+
+
+def make_flow(thresholds_s=None, frame_stride: int = 1, name: str = "flow") -> GeofenceController:
+    """The DIS + affine-expansion baseline behind the same controller logic."""
+    from bittc_core.estimator import make_estimator
+
+    cfg = GeofenceConfig(thresholds_s=tuple(thresholds_s) if thresholds_s is not None else default_thresholds(4),
+                         frame_stride=frame_stride)
+    return GeofenceController(make_estimator("flow"), cfg, name=name)

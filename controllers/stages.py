@@ -1,0 +1,65 @@
+"""Staged, latched AEB output shared by the oracle and the geofence controllers.
+
+Stages, as production AEB systems stage them (Euro NCAP / UN R152 style), on the
+bumper-to-bumper TTC of the critical in-path actor:
+  1. forward-collision warning when TTC <= ``warn_ttc_s`` (2.4 s, above NHTSA's
+     2.1 s minimum for a stopped lead at 72 km/h);
+  2. partial braking at ``partial_decel_mps2`` when TTC <= ``partial_ttc_s`` (1.6 s),
+     full braking instead when the constant deceleration needed to stop the closing
+     (v_rel^2 / (2 gap) = v_rel / (2 TTC)) exceeds ``required_decel_margin`` times the
+     partial deceleration;
+  3. full braking when TTC <= ``full_ttc_s`` (0.9 s).
+Braking latches: once engaged it is never reduced while a threat remains, and it is
+released (with the warning) only when the controller says the threat is gone.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from controllers.base import BrakeCommand
+
+MAX_DECEL_MPS2 = 9.0  # [m/s^2] full braking on dry asphalt
+
+
+@dataclass(frozen=True)
+class StageConfig:
+    warn_ttc_s: float = 2.4  # [s] bumper-to-bumper TTC
+    partial_ttc_s: float = 1.6  # [s]
+    full_ttc_s: float = 0.9  # [s]
+    partial_decel_mps2: float = 4.0  # [m/s^2]
+    full_decel_mps2: float = MAX_DECEL_MPS2  # [m/s^2]
+    required_decel_margin: float = 0.8  # [-] full braking when v_rel/(2 TTC) > margin * partial decel
+
+    def __post_init__(self) -> None:
+        if not 0 < self.full_ttc_s <= self.partial_ttc_s <= self.warn_ttc_s:
+            raise ValueError(f"StageConfig needs 0 < full_ttc_s <= partial_ttc_s <= warn_ttc_s, got {self}")
+        if not 0 < self.partial_decel_mps2 <= self.full_decel_mps2 <= MAX_DECEL_MPS2:
+            raise ValueError(f"StageConfig needs 0 < partial <= full decel <= {MAX_DECEL_MPS2} m/s^2, got {self}")
+
+
+class StagedBrake:
+    """Latched stage logic: ``update`` with which stages a threat has reached."""
+
+    def __init__(self, cfg: StageConfig) -> None:
+        self.cfg = cfg
+        self.level_mps2 = 0.0
+
+    def reset(self) -> None:
+        self.level_mps2 = 0.0
+
+    def update(self, warn: bool, partial: bool, full: bool, required_decel_mps2: float) -> BrakeCommand:
+        """A threat is present; ``warn`` / ``partial`` / ``full``: its stage thresholds reached."""
+        c = self.cfg
+        demand = 0.0
+        if full:
+            demand = c.full_decel_mps2
+        elif partial:
+            demand = c.full_decel_mps2 if required_decel_mps2 > c.required_decel_margin * c.partial_decel_mps2 else c.partial_decel_mps2
+        self.level_mps2 = max(self.level_mps2, demand)
+        return BrakeCommand(decel_mps2=self.level_mps2, warning=warn or self.level_mps2 > 0)
+
+    def release(self) -> BrakeCommand:
+        """No threat any more: brakes and warning off."""
+        self.level_mps2 = 0.0
+        return BrakeCommand()

@@ -1,0 +1,205 @@
+"""Compute latency as a real-time system sees it: latency modes, device profiles, the
+streaming schedule and the command queue. Pure Python, no renderer, no network.
+
+Convention (streaming perception, Li, Wang and Ramanan, ECCV 2020):
+    The camera captures frame k at t_k = k * dt. The estimator (with the policy behind
+    it) processes one frame pair at a time. A job on frame k starts at t_start >= t_k
+    and its output, a brake command, takes effect at t_start + L, where L is the
+    job's latency [s]. Frames are not queued: when the estimator becomes free at
+    t_free it takes the newest frame captured by then (paired with the frame captured
+    just before it, so the pair's interval stays the frame interval), or, if none is
+    newer than its last job, the next frame at its capture time. Frames in between
+    are skipped. The controller acts on the newest output that is ready. The brake
+    actuator's own delay comes after the command takes effect (``sim.traffic``).
+
+Latency modes (``parse_latency``):
+    ``measured``      L = the wall-clock time of the job's own call on this machine,
+                      frame by frame (not reproducible: it says so in the outputs);
+    ``fixed:MS``      L = MS milliseconds (deterministic);
+    ``profile:NAME``  L = a + b * K milliseconds with K thresholds, from a named device
+                      profile (``PROFILES``, listed by ``bittc profiles``; deterministic).
+"""
+
+from __future__ import annotations
+
+import heapq
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import yaml
+
+from bittc_core.errors import ConfigError
+
+PROFILES_FILE = Path(__file__).resolve().parent / "latency_profiles.yaml"
+TIME_EPS_S = 1e-9  # [s] tolerance when comparing times on the frame grid
+MAX_LATENCY_MS = 10_000.0  # [ms] a latency above this is surely a typo
+
+
+class LatencyError(ConfigError):
+    """A malformed latency mode, an unknown profile, or a latency that is not a time."""
+
+
+@dataclass(frozen=True)
+class DeviceProfile:
+    """L = a_ms + b_ms * K [ms] for K thresholds on one device (continuous mode: ``continuous_ms``)."""
+
+    name: str
+    a_ms: float  # [ms] per frame: feature extraction and overhead
+    b_ms: float  # [ms] per threshold
+    source: str  # where the numbers come from
+    measured: bool  # True when measured on the device, False when scaled or assumed
+    continuous_ms: float | None = None  # [ms] one continuous-TTC call, where known
+
+    def latency_ms(self, num_alphas: int) -> float:
+        return self.a_ms + self.b_ms * num_alphas
+
+
+_PROFILE_KEYS = {"a_ms", "b_ms", "source", "measured", "continuous_ms"}
+
+
+def load_profiles(path: Path = PROFILES_FILE) -> dict[str, DeviceProfile]:
+    """name -> profile from a YAML mapping ``{name: {a_ms, b_ms, source, measured[, continuous_ms]}}``."""
+    raw = yaml.safe_load(path.read_text())
+    if not isinstance(raw, dict):
+        raise LatencyError(f"{path}: expected a mapping of profile names")
+    out = {}
+    for name, d in raw.items():
+        if not isinstance(d, dict) or set(d) - _PROFILE_KEYS or not {"a_ms", "b_ms", "source", "measured"} <= set(d):
+            raise LatencyError(f"{path}: profile {name!r} needs exactly the keys {sorted(_PROFILE_KEYS)} "
+                               f"(continuous_ms optional), got {d!r}")
+        for key in ("a_ms", "b_ms", "continuous_ms"):
+            v = d.get(key)
+            if key in d and not (isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) and v >= 0):
+                raise LatencyError(f"{path}: profile {name!r}: {key} = {v!r} must be a finite number >= 0")
+        out[str(name)] = DeviceProfile(str(name), float(d["a_ms"]), float(d["b_ms"]), str(d["source"]),
+                                       bool(d["measured"]), d.get("continuous_ms"))
+    return out
+
+
+PROFILES = load_profiles()
+
+
+@dataclass(frozen=True)
+class LatencyMode:
+    """How a job's latency L is charged; see the module docstring."""
+
+    kind: str  # "measured" | "fixed" | "profile"
+    fixed_ms: float = 0.0  # [ms] with kind "fixed"
+    profile: DeviceProfile | None = None  # with kind "profile"
+
+    @property
+    def deterministic(self) -> bool:
+        return self.kind != "measured"
+
+    def __str__(self) -> str:
+        if self.kind == "fixed":
+            return f"fixed:{self.fixed_ms:g}"
+        if self.kind == "profile":
+            return f"profile:{self.profile.name}"
+        return "measured"
+
+    def latency_s(self, compute_s: float, num_alphas: int) -> float:
+        """L [s] of one job that took ``compute_s`` of wall-clock time with K thresholds."""
+        if self.kind == "measured":
+            L = compute_s
+        elif self.kind == "fixed":
+            L = self.fixed_ms * 1e-3
+        else:
+            L = self.profile.latency_ms(num_alphas) * 1e-3
+        return check_latency_s(L)
+
+
+def check_latency_s(latency_s: float) -> float:
+    if not (isinstance(latency_s, (int, float)) and math.isfinite(latency_s) and latency_s >= 0):
+        raise LatencyError(f"latency {latency_s!r} s: must be a finite number >= 0")
+    return float(latency_s)
+
+
+def parse_latency(text: str, profiles: dict[str, DeviceProfile] | None = None) -> LatencyMode:
+    """'measured' | 'fixed:MS' | 'profile:NAME' -> LatencyMode; anything else is refused by name."""
+    profiles = PROFILES if profiles is None else profiles
+    text = str(text).strip()
+    if text == "measured":
+        return LatencyMode("measured")
+    kind, sep, arg = text.partition(":")
+    if kind == "fixed" and sep:
+        try:
+            ms = float(arg)
+        except ValueError:
+            ms = math.nan
+        if not (math.isfinite(ms) and 0 <= ms <= MAX_LATENCY_MS):
+            raise LatencyError(f"latency {text!r}: fixed:MS needs a number of milliseconds in [0, {MAX_LATENCY_MS:g}]")
+        return LatencyMode("fixed", fixed_ms=ms)
+    if kind == "profile" and sep:
+        if arg not in profiles:
+            raise LatencyError(f"latency {text!r}: unknown profile {arg!r}; known: {', '.join(sorted(profiles))}")
+        return LatencyMode("profile", profile=profiles[arg])
+    raise LatencyError(f"latency {text!r}: expected measured, fixed:MS or profile:NAME")
+
+
+# ---------------------------------------------------------------------------- schedule
+def frame_index_at(t_s: float, frame_dt_s: float) -> int:
+    """Index of the newest frame captured at or before ``t_s``."""
+    return int(math.floor(t_s / frame_dt_s + 1e-6))
+
+
+def next_job(last_frame: int, t_free_s: float, frame_dt_s: float, first_frame: int = 0) -> tuple[int, float]:
+    """The estimator became free at ``t_free_s`` after its job on ``last_frame`` (-1 before
+    any job) -> (frame of its next job, the job's start time [s]).
+
+    The newest frame captured by ``t_free_s`` if it is newer than ``last_frame``, started
+    at once; otherwise the next frame, started at its capture time. Never a frame before
+    ``first_frame`` (the first frame that has a partner to pair with)."""
+    newest = frame_index_at(t_free_s, frame_dt_s)
+    if newest > last_frame and newest >= first_frame:
+        return newest, t_free_s
+    k = max(last_frame + 1, first_frame)
+    return k, max(k * frame_dt_s, t_free_s)
+
+
+@dataclass(frozen=True)
+class Job:
+    """One estimator job: the frame it processes and when it starts."""
+
+    frame: int
+    capture_s: float  # [s] the frame's capture time
+    start_s: float  # [s] when processing starts (>= capture_s)
+
+    @property
+    def wait_s(self) -> float:
+        """[s] the frame waited for the busy estimator."""
+        return self.start_s - self.capture_s
+
+
+class CommandQueue:
+    """Brake commands ordered by the time they take effect.
+
+    ``push(t_effect_s, seq, cmd)``: ``seq`` orders the commands by the frame they were
+    decided on. A due command becomes active unless a command decided on a newer frame
+    is already active (an output is never replaced by an older frame's output)."""
+
+    def __init__(self, initial) -> None:
+        self._heap: list[tuple[float, int, int, object]] = []
+        self._pushed = 0
+        self.active = initial
+        self.active_seq = -1
+
+    def push(self, t_effect_s: float, seq: int, cmd) -> None:
+        if not (isinstance(t_effect_s, (int, float)) and math.isfinite(t_effect_s)):
+            raise LatencyError(f"command effect time {t_effect_s!r} s: must be a finite number")
+        heapq.heappush(self._heap, (float(t_effect_s), int(seq), self._pushed, cmd))
+        self._pushed += 1
+
+    def update(self, t_s: float) -> bool:
+        """Make the commands due at ``t_s`` active; True when the active command changed."""
+        changed = False
+        while self._heap and self._heap[0][0] <= t_s + TIME_EPS_S:
+            _, seq, _, cmd = heapq.heappop(self._heap)
+            if seq >= self.active_seq:
+                changed |= cmd != self.active
+                self.active, self.active_seq = cmd, seq
+        return changed
+
+    def __len__(self) -> int:
+        return len(self._heap)

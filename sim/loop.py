@@ -1,0 +1,224 @@
+"""The one closed-loop core: clock, frame schedule, latency, command queue, end of run.
+
+``bittc run`` / ``bittc suite`` (``sim.runner``), the benchmark and the Gymnasium env
+(``sim.env``) all drive a scenario through :class:`ClosedLoop`, so that latency, frame
+skipping, the actuator and the end of a run behave the same everywhere.
+
+Time: the traffic integrates at ``ScenarioSim.sim_dt_s`` (100 Hz); the camera captures
+frame k at t_k = k * dt (every frame: only computation is ever skipped). Jobs follow the
+streaming schedule of :mod:`sim.latency`: a job on frame k starts at t_start, pairs frame
+k with frame k - stride, and its command takes effect at t_start + L (rounded up to the
+next traffic step); the actuator's delay follows. Commands are applied in the order they
+take effect (``sim.latency.CommandQueue``). The run ends as :meth:`ScenarioSim.done`
+says, checked at every frame boundary.
+
+Usage (what ``drive`` does)::
+
+    loop = ClosedLoop(sim, parse_latency("fixed:50"), num_alphas=4, pairs=True)
+    job = loop.reset()
+    while job is not None:
+        cmd = policy(loop.observation(job))
+        job = loop.submit(cmd, compute_s)   # None once the run has ended
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import cv2
+from collections import defaultdict
+from dataclasses import dataclass, field
+from typing import Callable
+
+from controllers.base import BrakeCommand, Calibration, Controller, Observation
+from sim.episode import Frame, ScenarioSim, StepTruth
+from sim.fence_lag import FenceLagMeter
+from sim.ground_truth import GroundTruth
+from sim.latency import CommandQueue, Job, LatencyMode, TIME_EPS_S, next_job
+from sim.vehicles import EGO_SIZE_M
+
+cv2.setNumThreads(1)  # OpenCV's own pool would contend with the estimator's torch threads
+
+
+@dataclass
+class FrameRecord:
+    """One captured frame: what happened to it, and the state at its capture."""
+
+    index: int
+    t_s: float  # [s] capture time
+    ego_speed_mps: float
+    ego_accel_mps2: float
+    truth: StepTruth  # ground truth at capture (never shown to a deployable policy)
+    active: BrakeCommand  # the command in effect at capture
+    status: str = "pending"  # processed | skipped (a newer frame was taken) | unused (run ended)
+    latency_s: float | None = None  # [s] estimator latency of its job
+    wait_s: float | None = None  # [s] from capture to the start of its job
+    decided: BrakeCommand | None = None  # its job's command
+    fence_cover: dict = field(default_factory=dict)  # threshold '<s>' -> share of the critical actor inside
+
+
+class ClosedLoop:
+    """One run of ``sim`` under a latency mode (see the module docstring).
+
+    Args:
+        sim: the scenario run (rendering when ``pairs`` or a capture hook needs frames).
+        latency: how each job's latency is charged.
+        num_alphas: thresholds per job (what a device profile charges).
+        pairs: jobs need an image pair: the first job is on frame ``frame_stride``.
+        frame_stride: the pair is (frame k - stride, frame k).
+        on_capture: called with (record, frame) after every capture (videos).
+        lag_meter: measures the fence lag of the critical actor from each job's geofences.
+    """
+
+    def __init__(self, sim: ScenarioSim, latency: LatencyMode, *, num_alphas: int = 0, pairs: bool = False,
+                 frame_stride: int = 1, on_capture: Callable[[FrameRecord, Frame], None] | None = None,
+                 lag_meter: FenceLagMeter | None = None) -> None:  # fmt: skip
+        if not isinstance(frame_stride, int) or frame_stride < 1:
+            raise ValueError(f"frame_stride = {frame_stride!r}: must be an integer >= 1")
+        self.sim = sim
+        self.latency = latency
+        self.num_alphas = int(num_alphas)
+        self.pairs = pairs
+        self.stride = frame_stride
+        self.on_capture = on_capture
+        self.lag_meter = lag_meter
+        self.frame_dt_s = sim.camera.dt_s
+        self.calibration = Calibration.from_camera(sim.camera, EGO_SIZE_M)
+        self.timing: dict[str, float] = defaultdict(float)  # [s] wall time per phase
+
+    # ------------------------------------------------------------------ public
+    def reset(self) -> Job:
+        """Start the run; -> the first job."""
+        self.truth = self.sim.reset()
+        self.queue = CommandQueue(BrakeCommand())
+        self.records: list[FrameRecord] = []
+        self._frames: dict[int, Frame] = {}
+        self._gt: dict[int, GroundTruth] = {}
+        self._substeps = 0
+        self.end_reason: str | None = None
+        self.first_warning: tuple[float, float | None] | None = None  # (t [s], critical TTC [s])
+        self.first_brake: tuple[float, float | None] | None = None
+        self.brake_integral = 0.0  # [m/s] integral of the commanded deceleration over time
+        self._capture()
+        self._first_frame = self.stride if self.pairs else 0
+        return self._schedule(-1, 0.0)
+
+    def observation(self, job: Job) -> Observation:
+        rec = self.records[job.frame]
+        latest = self._frames.get(job.frame)
+        prev = self._frames.get(job.frame - self.stride) if self.pairs else None
+        return Observation(rec.t_s, rec.ego_speed_mps, latest.image if latest is not None else None,
+                           prev.image if prev is not None else None, self.stride * self.frame_dt_s,
+                           self.calibration)  # fmt: skip
+
+    def truth_at(self, job: Job) -> StepTruth:
+        """Ground truth at the job's capture (for oracles, ``info`` and traces only)."""
+        return self.records[job.frame].truth
+
+    def ground_truth(self, frame: int) -> GroundTruth | None:
+        """Per-pixel ground truth of ``frame`` against the frame before (None without images)."""
+        if frame not in self._gt:
+            prev, latest = self._frames.get(frame - 1), self._frames.get(frame)
+            if prev is None or latest is None or latest.depth_m is None:
+                return None
+            t0 = time.perf_counter()
+            self._gt[frame] = self.sim.ground_truth(prev, latest)
+            self.timing["ground_truth_s"] += time.perf_counter() - t0
+        return self._gt[frame]
+
+    def submit(self, cmd: BrakeCommand, compute_s: float, who: str = "controller") -> Job | None:
+        """The command decided in the current job, which took ``compute_s`` of wall time;
+        -> the next job, or None when the run has ended."""
+        cmd.check(who)
+        job = self._job
+        L = self.latency.latency_s(compute_s, self.num_alphas)
+        rec = self.records[job.frame]
+        rec.status, rec.latency_s, rec.wait_s, rec.decided = "processed", L, job.wait_s, cmd
+        self.queue.push(job.start_s + L, job.frame, cmd)
+        if self.lag_meter is not None and cmd.view is not None and rec.truth.critical is not None:
+            gt = self.ground_truth(job.frame)
+            if gt is not None:
+                rec.fence_cover = self.lag_meter.update(cmd.view, gt, rec.truth.critical)
+        return self._schedule(job.frame, job.start_s + L)
+
+    def drive(self, controller: Controller) -> None:
+        """Run to the end with ``controller`` deciding every job (reset with this car's calibration)."""
+        controller.reset(self.calibration)
+        job = self.reset()
+        while job is not None:
+            obs = self.observation(job)
+            truth = self.truth_at(job) if controller.uses_ground_truth else None
+            t0 = time.perf_counter()
+            cmd = controller.act(obs, truth)
+            dt = time.perf_counter() - t0
+            self.timing["controller_s"] += dt
+            job = self.submit(cmd, dt, controller.name)
+
+    @property
+    def processed(self) -> list[FrameRecord]:
+        return [r for r in self.records if r.status == "processed"]
+
+    # ------------------------------------------------------------------ internals
+    def _schedule(self, last_frame: int, t_free_s: float) -> Job | None:
+        k, start = next_job(last_frame, t_free_s, self.frame_dt_s, self._first_frame)
+        self._advance_to(start)
+        for r in self.records[max(last_frame + 1, 0) : k]:
+            if r.status == "pending":
+                r.status = "skipped"
+        if self.end_reason is not None:
+            for r in self.records:
+                if r.status == "pending":
+                    r.status = "unused"
+            self._frames.clear()
+            return None
+        self._job = Job(k, self.records[k].t_s, max(start, self.records[k].t_s))
+        return self._job
+
+    def _advance_to(self, t_s: float) -> None:
+        sim = self.sim
+        while self.end_reason is None and sim.t_s < t_s - TIME_EPS_S:
+            self._apply_due()
+            t0 = time.perf_counter()
+            sim.substep(self.queue.active.decel_mps2)
+            self.timing["traffic_s"] += time.perf_counter() - t0
+            self.brake_integral += self.queue.active.decel_mps2 * sim.sim_dt_s
+            self._substeps += 1
+            if self._substeps % sim.n_sub == 0:
+                t0 = time.perf_counter()
+                self.truth = sim.truth()
+                self.end_reason = sim.done(self.truth)
+                self.timing["truth_s"] += time.perf_counter() - t0
+                if self.end_reason is None:
+                    self._capture()
+
+    def _apply_due(self) -> None:
+        if not self.queue.update(self.sim.t_s):
+            return
+        a = self.queue.active
+        if a.warning and self.first_warning is None:
+            self.first_warning = (self.sim.t_s, _critical_ttc(self.sim))
+        if a.decel_mps2 > 0 and self.first_brake is None:
+            self.first_brake = (self.sim.t_s, _critical_ttc(self.sim))
+
+    def _capture(self) -> None:
+        self._apply_due()
+        sim = self.sim
+        t0 = time.perf_counter()
+        frame = sim.capture()
+        self.timing["render_s"] += time.perf_counter() - t0
+        rec = FrameRecord(len(self.records), sim.t_s, float(sim.ego.speed), float(sim.ego.current_accel_mps2),
+                          self.truth, self.queue.active)  # fmt: skip
+        self.records.append(rec)
+        self._frames[rec.index] = frame
+        for k in [k for k in self._frames if k < rec.index - self.stride - 1]:
+            del self._frames[k]
+        for k in [k for k in self._gt if k < rec.index - self.stride - 1]:
+            del self._gt[k]
+        if self.on_capture is not None:
+            self.on_capture(rec, frame)
+
+
+def _critical_ttc(sim: ScenarioSim) -> float | None:
+    c = sim.truth().critical
+    return c.ttc_s if c is not None and math.isfinite(c.ttc_s) else None
