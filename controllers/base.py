@@ -89,7 +89,7 @@ class GeofenceView:
     """What a geofence controller saw in one job, for videos and fence-lag measurement.
 
     ``maps``: (K, H, W) float32 p(0 < tau <= thresholds_s[i]) of the latest frame;
-    ``counted``: (H, W) bool, the pixels that counted as in-path evidence for any fence;
+    ``counted``: (H, W) bool, the in-path regions that counted as evidence for any fence;
     ``corridor``: (H, W) bool, the ego's corridor for the largest fence."""
 
     thresholds_s: tuple[float, ...]  # [s] camera-plane TTC, from the latest frame

@@ -27,8 +27,12 @@ estimator's map p_i = p(0 < tau <= tau_i)):
    road nearer than the fence's ground boundary, so its counted pixels reach down to
    the lowest counted row; a region whose bottom ends more than ``contact_px`` rows
    above it (the textureless sky, a far tree top) does not count. The largest such
-   8-connected region must have at least ``min_region_px`` pixels (a 1.7 m target at
-   53 m is about 6 px wide). Rows count only when the ground one row below them is
+   8-connected region must have at least ``min_region_px`` pixels, and at least the
+   area that ``min_face_m2`` of face covers at the fence's depth Z_i,
+   fx fy A / Z_i^2 (a 1.7 x 1.5 m target at 53 m covers about 6 x 5 px; 0.3 m^2 at
+   18 m is 30 px: a far target that the network puts into a near fence is too small
+   for it).
+   Rows count only when the ground one row below them is
    outside the fence too (near the horizon one row spans tens of metres).
 5. **Persistent**: the fence fires after ``persistence_frames`` consecutive jobs with
    such a region.
@@ -104,7 +108,8 @@ class GeofenceConfig:
     prob_inside: float = 0.5  # [-] a pixel is inside a fence above this probability
     ground_margin: float = 1.25  # [-] count rows with tau_ground > margin * tau_i
     corridor_margin_m: float = 0.25  # [m] beyond the ego's half width, each side
-    min_region_px: int = 6  # [px] smallest connected in-path region
+    min_region_px: int = 8  # [px] smallest connected in-path region
+    min_face_m2: float = 0.3  # [m^2] smallest face an obstacle shows at the fence's depth
     contact_px: int = 2  # [px] a region's bottom lies at most this far above the lowest counted row
     persistence_frames: int = 2  # [jobs] consecutive jobs before a fence fires
     release_frames: int = 3  # [jobs] without any fence firing before braking is released
@@ -119,6 +124,7 @@ class GeofenceConfig:
             "corridor_margin_m": self.corridor_margin_m >= 0,
             "min_region_px": self.min_region_px >= 1,
             "contact_px": self.contact_px >= 0,
+            "min_face_m2": self.min_face_m2 >= 0,
             "persistence_frames": self.persistence_frames >= 1,
             "release_frames": self.release_frames >= 1,
             "min_speed_mps": self.min_speed_mps >= 0,
@@ -129,19 +135,34 @@ class GeofenceConfig:
                 raise ConfigError(f"GeofenceConfig.{name} = {getattr(self, name)!r} is out of range")
 
 
-def largest_region_px(mask: np.ndarray, lowest_row: int | None = None, contact_px: int = 0) -> int:
-    """Pixels of the largest 8-connected region of a (H, W) bool mask; with ``lowest_row``,
-    only regions whose bottom row is at least ``lowest_row - contact_px``."""
+def estimator_thresholds(estimator, thresholds_s, frame_dt_s: float, frame_stride: int = 1) -> np.ndarray:
+    """Thresholds [s] for a pair ``frame_stride * frame_dt_s`` apart -> the same
+    eta = tau / (tau + pair interval) as thresholds in the estimator's own time base
+    (tau * dt_est / pair interval); refused when outside the estimator's trained range."""
+    pair_dt_s = frame_dt_s * frame_stride
+    thr = np.asarray(thresholds_s, dtype=np.float64)
+    thr_est = thr * estimator.dt_s / pair_dt_s
+    lo, hi = estimator.tau_range_s
+    for t, t_est in zip(thr, thr_est):
+        if not lo * (1 - 1e-6) <= t_est <= hi * (1 + 1e-6):
+            raise ConfigError(
+                f"frame interval {pair_dt_s:g} s ({frame_dt_s:g} s x stride {frame_stride}): threshold {t:g} s asks "
+                f"the estimator for {t_est:g} s at its trained {estimator.dt_s:g} s, outside its range "
+                f"[{lo:g}, {hi:g}] s")
+    return thr_est
+
+
+def standing_regions(mask: np.ndarray, lowest_row: int, contact_px: int) -> tuple[int, np.ndarray]:
+    """8-connected regions of a (H, W) bool mask whose bottom row is at least
+    ``lowest_row - contact_px`` -> (pixels of the largest, (H, W) bool mask of them all)."""
     if not mask.any():
-        return 0
-    n, _, stats, _ = cv2.connectedComponentsWithStats(mask.astype(np.uint8), connectivity=8)
-    if n <= 1:
-        return 0
-    area = stats[1:, cv2.CC_STAT_AREA]
-    if lowest_row is not None:
-        bottom = stats[1:, cv2.CC_STAT_TOP] + stats[1:, cv2.CC_STAT_HEIGHT] - 1
-        area = area[bottom >= lowest_row - contact_px]
-    return int(area.max()) if area.size else 0
+        return 0, np.zeros_like(mask)
+    n, labels, stats, _ = cv2.connectedComponentsWithStats(mask.astype(np.uint8), connectivity=8)
+    bottom = stats[1:, cv2.CC_STAT_TOP] + stats[1:, cv2.CC_STAT_HEIGHT] - 1
+    keep = np.flatnonzero(bottom >= lowest_row - contact_px) + 1
+    if keep.size == 0:
+        return 0, np.zeros_like(mask)
+    return int(stats[keep, cv2.CC_STAT_AREA].max()), np.isin(labels, keep)
 
 
 def nearest_log(values: np.ndarray, target: float) -> int:
@@ -167,22 +188,9 @@ class GeofenceController(Controller):
         self.cal: Calibration | None = None
         self._warm = False
 
-    def estimator_thresholds(self, pair_dt_s: float) -> np.ndarray:
-        """The thresholds (sorted) in the estimator's own time base for a pair ``pair_dt_s`` apart:
-        the same eta = tau / (tau + pair_dt_s). Refused when outside its trained range."""
-        thr = self._thr * self.estimator.dt_s / pair_dt_s
-        lo, hi = self.estimator.tau_range_s
-        for t, t_est in zip(self._thr, thr):
-            if not lo * (1 - 1e-6) <= t_est <= hi * (1 + 1e-6):
-                raise ConfigError(
-                    f"frame interval {pair_dt_s:g} s (frame interval x stride {self.frame_stride}): threshold "
-                    f"{t:g} s asks the estimator for {t_est:g} s at its trained {self.estimator.dt_s:g} s, outside "
-                    f"its range [{lo:g}, {hi:g}] s")
-        return thr
-
     def reset(self, calibration: Calibration) -> None:
         self.cal = calibration
-        self._thr_est = self.estimator_thresholds(calibration.frame_dt_s * self.frame_stride)
+        self._thr_est = estimator_thresholds(self.estimator, self._thr, calibration.frame_dt_s, self.frame_stride)
         if not self._warm:  # the first call of a network pays one-off costs no deployed system pays per frame
             blank = np.zeros((calibration.height_px, calibration.width_px, 3), np.uint8)
             self.estimator.geofence(blank, blank + 1, self._thr_est)
@@ -191,7 +199,7 @@ class GeofenceController(Controller):
             self.estimator.reset()
         self._stages.reset()
         self._streak = np.zeros(len(self._thr), dtype=np.int64)
-        self._quiet = 0
+        self._quiet = self.cfg.release_frames  # nothing to hold at the start
         self._last = BrakeCommand()
 
     def _evidence(self, maps: np.ndarray, speed_mps: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -212,10 +220,15 @@ class GeofenceController(Controller):
             region = np.zeros_like(counted)
             if u1 >= u0:
                 region[rows, u0 : u1 + 1] = True
-            mask = (maps[i] > c.prob_inside) & region
-            lowest = int(np.flatnonzero(rows).max()) if rows.any() else None
-            sizes[i] = largest_region_px(mask, lowest, c.contact_px)
-            counted |= mask
+            if not rows.any():
+                continue
+            lowest = int(np.flatnonzero(rows).max())
+            area, standing = standing_regions((maps[i] > c.prob_inside) & region, lowest, c.contact_px)
+            depth = static_depth_m(cal, speed_mps, tau) if speed_mps > 0 else 0.0
+            need = max(c.min_region_px, cal.fx_px * cal.fy_px * c.min_face_m2 / depth**2 if depth > 0 else 0.0)
+            if area >= need:
+                sizes[i] = area
+                counted |= standing
             corridor |= region
         return sizes, counted, corridor
 

@@ -2,21 +2,36 @@
 
 Registered as ``bittc/Scenario-v0``::
 
-    env = gymnasium.make("bittc/Scenario-v0", scenario="CCRs-50")
+    env = gymnasium.make("bittc/Scenario-v0", scenario="CCRs-50", latency="fixed:50")
+    obs, info = env.reset(seed=0, options={"scenario": "CCRm-50"})  # any case, same camera
+
+The run goes through the closed-loop core (``sim.loop.ClosedLoop``), exactly as in
+``bittc run``: a step is one job of the streaming schedule (``sim.latency``). The agent
+sees a frame pair; its action is the command decided on that pair and takes effect
+L after the job starts, where L comes from ``latency`` (``fixed:MS``, ``profile:NAME``, or
+``measured``: the compute time charged by a wrapper such as ``GeofenceObservation``; the
+agent's own thinking time is not measured). While busy, frames are skipped, so with
+L > the frame interval one step spans several frames.
 
 Observation Space (Dict):
-    ============== ======================= =============================================
-    key            space                   meaning
-    ============== ======================= =============================================
-    image          Box(0, 255, (H, W, 3))  latest ego-camera frame, uint8 RGB
-    ego_speed_mps  Box(0, 60, (1,))        the ego's own speed [m/s]
-    ============== ======================= =============================================
+    ============== ========================== ==========================================
+    key            space                      meaning
+    ============== ========================== ==========================================
+    image          Box(0, 255, (H, W, 3))     latest ego-camera frame, uint8 RGB
+    image_prev     Box(0, 255, (H, W, 3))     the frame ``frame_stride`` frames before it
+    ego_speed_mps  Box(0, 60, (1,))           the ego's own speed at capture [m/s]
+    calibration    Box(-1e4, 1e4, (8,))       fx, fy, cx, cy [px], camera height [m],
+                                              pitch [deg], bumper ahead of the camera [m],
+                                              ego width [m]
+    ============== ========================== ==========================================
+    ``GeofenceObservation`` adds ``geofence`` (K, H, W) in [0, 1] and ``thresholds_s`` (K,).
 
 Action Space: Box(0, 9, (1,)) — requested deceleration [m/s^2], applied through the
-actuator model (0.1 s delay, 30 m/s^3 jerk limit) for one frame interval.
+actuator model (0.1 s delay, 30 m/s^3 jerk limit) once it takes effect. A NaN,
+negative or larger action is refused with a ValueError naming it.
 
-Reward: -1 on the step of a collision, minus 0.01 per (m/s^2 * s) of braking (a mild
-comfort cost); 0 otherwise.
+Reward: -1 on the step of a collision, minus 0.01 per (m/s^2 * s) of commanded braking
+(a mild comfort cost); 0 otherwise.
 
 Episode End:
     terminated — 1 s after a collision, ego standstill with nothing closing in, or the
@@ -32,96 +47,193 @@ ground and plain vehicles by default).
 
 from __future__ import annotations
 
+import time
 from dataclasses import asdict
 
 import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
+from controllers.base import BrakeCommand
+from controllers.stages import MAX_DECEL_MPS2
 from sim.camera import CameraConfig
 from sim.episode import ScenarioSim
+from sim.latency import LatencyMode, parse_latency
+from sim.loop import ClosedLoop
 from sim.textures import TextureStyle
+from sim.traffic import MAX_SPEED_MPS
 
-MAX_DECEL_MPS2 = 9.0  # [m/s^2]
-MAX_SPEED_MPS = 60.0  # [m/s]
+CALIBRATION_BOUND = 1e4  # [px or m or deg] bounds of the calibration vector's space
+
+
+def _one_case(scenario: str):
+    import scenarios
+
+    cases = scenarios.resolve(scenario)
+    if len(cases) != 1:
+        raise ValueError(f"scenario {scenario!r} expands to {len(cases)} cases; name one case (e.g. {cases[0].name})")
+    return cases[0]
 
 
 class ScenarioEnv(gym.Env):
     metadata = {"render_modes": ["rgb_array"], "render_fps": 10}
 
     def __init__(self, scenario: str = "CCRs-50", camera: CameraConfig | None = None, render_mode: str | None = None,
-                 textures: TextureStyle | None = None):  # fmt: skip
-        import scenarios
-
-        cases = scenarios.resolve(scenario)
-        if len(cases) != 1:
-            raise ValueError(f"scenario {scenario!r} expands to {len(cases)} cases; name one case (e.g. {cases[0].name})")
-        self.case = cases[0]
+                 textures: TextureStyle | None = None, latency: str | LatencyMode = "fixed:0",
+                 frame_stride: int = 1):  # fmt: skip
+        self.case = _one_case(scenario)
         self.camera = camera or CameraConfig()
         if textures is not None and not isinstance(textures, TextureStyle):
             raise ValueError(f"textures={textures!r}: expected a sim.textures.TextureStyle")
         self.textures = textures or TextureStyle()
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode {render_mode!r} is not supported")
+        self.latency = latency if isinstance(latency, LatencyMode) else parse_latency(latency)
+        if not isinstance(frame_stride, int) or not 1 <= frame_stride <= 10:
+            raise ValueError(f"frame_stride={frame_stride!r}: must be an integer in [1, 10]")
+        self.frame_stride = frame_stride
+        self.num_alphas = 0  # thresholds per step, set by a wrapper that runs an estimator
         self.render_mode = render_mode
         self.metadata = {**self.metadata, "render_fps": self.camera.fps_hz}
         h, w = self.camera.height_px, self.camera.width_px
         self.observation_space = spaces.Dict({
             "image": spaces.Box(0, 255, (h, w, 3), np.uint8),
+            "image_prev": spaces.Box(0, 255, (h, w, 3), np.uint8),
             "ego_speed_mps": spaces.Box(0.0, MAX_SPEED_MPS, (1,), np.float32),
+            "calibration": spaces.Box(-CALIBRATION_BOUND, CALIBRATION_BOUND, (8,), np.float32),
         })  # fmt: skip
         self.action_space = spaces.Box(0.0, MAX_DECEL_MPS2, (1,), np.float32)
         self._sim: ScenarioSim | None = None
-        self._prev = self._frame = None
+        self._loop: ClosedLoop | None = None
+        self._charged_s = 0.0
+
+    def charge(self, compute_s: float) -> None:
+        """Add ``compute_s`` [s] of compute to the current step's job (``measured`` latency)."""
+        self._charged_s += float(compute_s)
 
     def _obs(self) -> dict:
-        return {"image": self._frame.image, "ego_speed_mps": np.array([min(self._sim.ego.speed, MAX_SPEED_MPS)], np.float32)}
+        o = self._loop.observation(self._job)
+        c = o.calibration
+        calib = [c.fx_px, c.fy_px, c.cx_px, c.cy_px, c.mount_height_m, c.pitch_deg, c.bumper_ahead_m, c.ego_width_m]
+        return {"image": o.image_latest.copy(), "image_prev": o.image_prev.copy(),
+                "ego_speed_mps": np.array([min(o.ego_speed_mps, MAX_SPEED_MPS)], np.float32),
+                "calibration": np.array(calib, np.float32)}  # fmt: skip
 
-    def _info(self, truth) -> dict:
-        """Ground truth as plain dicts and arrays: per-actor truth, the critical actor,
-        the collision, and (from the second frame on) the per-pixel maps."""
+    def _info(self) -> dict:
+        """Ground truth at the observed frame's capture, as plain dicts and arrays:
+        per-actor truth, the critical actor, the collision, the per-pixel maps."""
+        truth = self._loop.truth_at(self._job)
         info = {
             "t_s": truth.t_s,
             "actors": [asdict(a) for a in truth.actors],
             "critical": asdict(truth.critical) if truth.critical is not None else None,
             "collision": asdict(truth.collision) if truth.collision is not None else None,
         }
-        if self._prev is not None:
-            info["gt"] = asdict(self._sim.ground_truth(self._prev, self._frame))
+        gt = self._loop.ground_truth(self._job.frame)
+        if gt is not None:
+            info["gt"] = asdict(gt)
         return info
 
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         super().reset(seed=seed)
+        options = options or {}
+        unknown = sorted(set(options) - {"scenario"})
+        if unknown:
+            raise ValueError(f"reset option {unknown[0]!r} is unknown (known: scenario)")
+        if "scenario" in options:
+            self.case = _one_case(options["scenario"])
         self.close()
         world_seed = int(self.np_random.integers(2**31 - 1))
         self._sim = ScenarioSim(self.case, self.camera, world_seed, render=True, textures=self.textures)
-        truth = self._sim.reset()
-        self._prev, self._frame = None, self._sim.capture()
-        return self._obs(), self._info(truth)
+        self._loop = ClosedLoop(self._sim, self.latency, num_alphas=self.num_alphas, pairs=True,
+                                frame_stride=self.frame_stride)  # fmt: skip
+        self._charged_s = 0.0
+        self._job = self._loop.reset()
+        self._last = (self._obs(), self._info())
+        return self._last
 
     def step(self, action):
-        if self._sim is None:
+        if self._loop is None:
             raise RuntimeError("call reset() before step()")
-        decel = float(np.clip(np.asarray(action, np.float32).reshape(-1)[0], 0.0, MAX_DECEL_MPS2))
+        if self._loop.end_reason is not None:
+            raise RuntimeError("the episode has ended: call reset()")
+        a = np.asarray(action, dtype=np.float64).reshape(-1)
+        if a.size != 1 or not np.isfinite(a[0]) or not 0.0 <= a[0] <= MAX_DECEL_MPS2:
+            raise ValueError(f"action {np.asarray(action).tolist()!r}: expected one finite deceleration in "
+                             f"[0, {MAX_DECEL_MPS2:g}] m/s^2")
         had_collision = self._sim.collision is not None
-        for _ in range(self._sim.n_sub):
-            self._sim.substep(decel)
-        self._prev, self._frame = self._frame, self._sim.capture()
-        truth = self._sim.truth()
-        reason = self._sim.done(truth)
-        reward = -0.01 * decel * self.camera.dt_s
+        brake0 = self._loop.brake_integral
+        job = self._loop.submit(BrakeCommand(float(a[0])), self._charged_s, who="agent")
+        self._charged_s = 0.0
+        reward = -0.01 * (self._loop.brake_integral - brake0)
         if self._sim.collision is not None and not had_collision:
             reward -= 1.0
-        info = self._info(truth)
-        info["end_reason"] = reason
-        return self._obs(), float(reward), reason in ("collision", "standstill", "resolved"), reason == "duration", info
+        reason = self._loop.end_reason
+        if job is not None:
+            self._job = job
+            self._last = (self._obs(), self._info())
+        obs, info = self._last
+        obs = {k: v.copy() for k, v in obs.items()}
+        info = {**info, "end_reason": reason}
+        return obs, float(reward), reason in ("collision", "standstill", "resolved"), reason == "duration", info
 
     def render(self):
-        if self.render_mode == "rgb_array" and self._frame is not None:
-            return self._frame.image
+        if self.render_mode == "rgb_array" and self._last is not None:
+            return self._last[0]["image"]
         return None
 
     def close(self):
         if self._sim is not None:
             self._sim.close()
             self._sim = None
+            self._loop = None
+
+
+class GeofenceObservation(gym.Wrapper):
+    """Adds an estimator's K geofences of every observed pair to the observation, and
+    charges the estimator's compute to the step's job (``measured`` latency) and its K to
+    the env (``profile`` latency): latency as in ``bittc run``.
+
+    ``estimator``: a name for ``bittc_core.estimator.make_estimator`` ("bittc", "flow") or
+    an ``Estimator``; ``thresholds_s`` (camera-plane TTC [s], any order) or
+    ``num_alphas`` (``controllers.geofence.default_thresholds``)."""
+
+    def __init__(self, env: gym.Env, estimator="bittc", thresholds_s=None, num_alphas: int | None = None):
+        super().__init__(env)
+        from bittc_core.estimator import make_estimator
+        from controllers.geofence import check_thresholds, default_thresholds, estimator_thresholds
+
+        if thresholds_s is not None and num_alphas is not None:
+            raise ValueError("give thresholds_s or num_alphas, not both")
+        self.estimator = make_estimator(estimator) if isinstance(estimator, str) else estimator
+        thr = check_thresholds(thresholds_s) if thresholds_s is not None else default_thresholds(num_alphas or 4)
+        base = env.unwrapped
+        self.thresholds_s = np.asarray(thr, np.float32)
+        self._thr_est = estimator_thresholds(self.estimator, thr, base.camera.dt_s, base.frame_stride)
+        base.num_alphas = len(thr)
+        k, h, w = len(thr), base.camera.height_px, base.camera.width_px
+        self.observation_space = spaces.Dict({
+            **env.observation_space.spaces,
+            "geofence": spaces.Box(0.0, 1.0, (k, h, w), np.float32),
+            "thresholds_s": spaces.Box(0.0, float(max(thr)), (k,), np.float32),
+        })  # fmt: skip
+
+    def _augment(self, obs: dict) -> dict:
+        t0 = time.perf_counter()
+        maps = self.estimator.geofence(obs["image_prev"], obs["image"], self._thr_est)
+        self.env.unwrapped.charge(time.perf_counter() - t0)
+        self._maps = np.clip(maps, 0.0, 1.0).astype(np.float32)
+        return {**obs, "geofence": self._maps, "thresholds_s": self.thresholds_s.copy()}
+
+    def reset(self, **kwargs):
+        if hasattr(self.estimator, "reset"):
+            self.estimator.reset()
+        obs, info = self.env.reset(**kwargs)
+        return self._augment(obs), info
+
+    def step(self, action):
+        obs, reward, terminated, truncated, info = self.env.step(action)
+        if terminated or truncated:  # the run has ended: the last observation again
+            last = {**obs, "geofence": self._maps.copy(), "thresholds_s": self.thresholds_s.copy()}
+            return last, reward, terminated, truncated, info
+        return self._augment(obs), reward, terminated, truncated, info

@@ -16,13 +16,15 @@ def test_run_writes_documented_outputs(tmp_path, capsys):
     s = json.loads((out / "summary.json").read_text())
     for key in ("scenario", "controller", "threat", "collision", "impact_speed_kph", "relative_impact_speed_kph",
                 "min_gap_m", "t_first_warning_s", "ttc_at_first_warning_s", "t_first_brake_s",
-                "ttc_at_first_brake_s", "false_alarm", "steps", "sim_time_s", "wall_time_s"):  # fmt: skip
+                "ttc_at_first_brake_s", "false_alarm", "steps", "sim_time_s", "num_alphas", "thresholds_s",
+                "latency_mode", "latency_ms_mean", "latency_ms_p95", "frames_skipped"):  # fmt: skip
         assert key in s
     header = (out / "trace.csv").read_text().splitlines()[0].split(",")
     for col in ("t_s", "ego_speed_kph", "critical_ttc_s", "warning", "brake_cmd_mps2", "gap_m_actor1"):
         assert col in header
     assert (out / "config.yaml").exists()
-    assert sorted(p.name for p in out.iterdir()) == ["config.yaml", "summary.json", "trace.csv"]
+    assert sorted(p.name for p in out.iterdir()) == ["config.yaml", "summary.json", "timing.json", "trace.csv"]
+    assert "wall_time_s" in json.loads((out / "timing.json").read_text())
 
 
 def test_run_with_video(tmp_path):

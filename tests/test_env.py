@@ -1,15 +1,28 @@
-"""The registered Gymnasium environment: API conformance and seeded determinism."""
+"""The registered Gymnasium environment: API conformance, seeded determinism, latency
+charged as in `bittc run`, the geofence wrapper and vector envs."""
+
+import math
 
 import gymnasium as gym
 import numpy as np
+import pytest
 from gymnasium.utils.env_checker import check_env
 
 import sim  # noqa: F401  (registers bittc/Scenario-v0)
+from sim.env import GeofenceObservation, ScenarioEnv
 
 
 def test_check_env():
     env = gym.make("bittc/Scenario-v0", scenario="CCRs-30")
     check_env(env.unwrapped, skip_render_check=True)
+    env.close()
+
+
+def test_check_env_with_geofences():
+    env = GeofenceObservation(ScenarioEnv("CCRs-30", latency="profile:this-cpu"), estimator="flow", num_alphas=2)
+    check_env(env, skip_render_check=True)
+    obs, _ = env.reset(seed=1)
+    assert obs["geofence"].shape == (2, 96, 288) and np.allclose(obs["thresholds_s"], [0.8, 2.8])
     env.close()
 
 
@@ -25,7 +38,7 @@ def test_same_seed_same_rollout_and_truth_stays_in_info():
             if term or trunc:
                 break
         env.close()
-        assert set(obs) == {"image", "ego_speed_mps"}
+        assert set(obs) == {"image", "image_prev", "ego_speed_mps", "calibration"}
         assert info["gt"]["tau_s"].shape == obs["image"].shape[:2] and info["critical"]["ttc_s"] > 0
         return images, rewards, info["end_reason"]
 
@@ -34,16 +47,54 @@ def test_same_seed_same_rollout_and_truth_stays_in_info():
     assert all(np.array_equal(x, y) for x, y in zip(a[0], b[0]))
 
 
+def test_latency_skips_frames_as_the_runner_does():
+    """150 ms of latency: a step spans 1.5 frames on average, as in the streaming schedule."""
+    env = ScenarioEnv("CCRs-30", latency="fixed:150")
+    _, info = env.reset(seed=0)
+    times = [info["t_s"]]
+    for _ in range(4):
+        _, _, _, _, info = env.step(np.zeros(1, np.float32))
+        times.append(info["t_s"])
+    env.close()
+    assert np.allclose(times, [0.1, 0.2, 0.4, 0.5, 0.7])
+
+
+def test_reset_option_picks_the_scenario():
+    env = ScenarioEnv("CCRs-30")
+    env.reset(seed=0, options={"scenario": "CCRm-50"})
+    assert env.case.name == "CCRm-50"
+    with pytest.raises(ValueError, match="expands to"):
+        env.reset(options={"scenario": "CCRs"})
+    env.close()
+
+
+@pytest.mark.parametrize("action", [[math.nan], [-0.5], [9.5], [1.0, 2.0]])
+def test_bad_actions_are_refused_by_value(action):
+    env = ScenarioEnv("CCRs-30")
+    env.reset(seed=0)
+    with pytest.raises(ValueError, match="action"):
+        env.step(np.array(action, np.float32))
+    env.close()
+
+
+def test_vector_env_sync():
+    envs = gym.make_vec("bittc/Scenario-v0", num_envs=2, vectorization_mode="sync", scenario="CCRs-20",
+                        wrappers=[lambda e: GeofenceObservation(e, estimator="flow", thresholds_s=[1.0, 2.0])])
+    obs, _ = envs.reset(seed=3)
+    assert obs["geofence"].shape == (2, 2, 96, 288)
+    obs, r, term, trunc, _ = envs.step(np.zeros((2, 1), np.float32))
+    assert r.shape == (2,) and obs["image"].shape == (2, 96, 288, 3)
+    envs.close()
+
+
 def test_texture_styles_change_only_what_they_name():
     """The same seed with detailed vehicles: the same static world, other vehicle pixels;
     with the smooth ground: other ground pixels, the same vehicle pixels."""
-    from sim.env import ScenarioEnv
     from sim.textures import TextureStyle
 
     def first_frame(style):
         env = ScenarioEnv("CCRs-10", textures=style)  # the target 14 m ahead
         obs, info = env.reset(seed=3)
-        obs, _, _, _, info = env.step(np.zeros(1, np.float32))
         env.close()
         return obs["image"].astype(int), info["gt"]["instance"]
 

@@ -1,0 +1,135 @@
+"""The geofence controller on hand-made maps: no renderer, no network.
+
+The maps are what a perfect estimator would give at 50 km/h: the road ahead inside every
+fence up to its boundary row, and boxes standing on the road wherever a test puts them."""
+
+import math
+
+import numpy as np
+import pytest
+
+from bittc_core.errors import ConfigError
+from controllers.base import Calibration, Observation
+from controllers.geofence import GeofenceConfig, GeofenceController, default_thresholds
+from controllers.road import ground_ttc_per_row
+from sim.camera import CameraConfig, cam_T_ego
+from sim.vehicles import EGO_SIZE_M
+
+CAM = CameraConfig()
+CAL = Calibration.from_camera(CAM, EGO_SIZE_M)
+SPEED = 50 / 3.6  # [m/s]
+THR = (0.8, 1.2, 1.8, 2.8)  # [s]
+
+
+class MapEstimator:
+    """Returns ``self.tau`` (H, W) camera-plane TTC [s] as hard geofences."""
+
+    dt_s = 0.1
+    tau_range_s = (0.2, 10.0)
+
+    def __init__(self):
+        self.tau = np.full((CAM.height_px, CAM.width_px), np.inf)
+
+    def geofence(self, prev, latest, thresholds_s):
+        t = np.asarray(thresholds_s)[:, None, None]
+        return ((self.tau > 0) & (self.tau <= t)).astype(np.float32)
+
+
+def project(x_fwd_m, y_left_m, z_up_m):
+    """Ego-frame point -> (u, v) px."""
+    p = cam_T_ego(CAM) @ np.array([x_fwd_m, y_left_m, z_up_m, 1.0])
+    fx, fy, cx, cy = CAM.intrinsics()
+    return fx * p[0] / p[2] + cx, fy * p[1] / p[2] + cy
+
+
+def road(speed_mps=SPEED):
+    tau = np.repeat(ground_ttc_per_row(CAL, speed_mps)[:, None], CAM.width_px, axis=1)
+    return tau
+
+
+def add_box(tau, dist_m, lateral_m, tau_s, width_m=1.8, height_m=1.5):
+    """A vertical face ``dist_m`` ahead of the camera, centred ``lateral_m`` to the left."""
+    x = CAM.mount_forward_m + dist_m
+    u_a, v_bottom = project(x, lateral_m + width_m / 2, 0.0)
+    u_b, v_top = project(x, lateral_m - width_m / 2, height_m)
+    u0, u1 = int(math.floor(min(u_a, u_b))), int(math.ceil(max(u_a, u_b)))
+    r0, r1 = int(math.floor(v_top)), int(math.ceil(v_bottom))
+    tau[max(r0, 0) : max(r1, 0), max(u0, 0) : max(u1, 0)] = tau_s
+    return tau
+
+
+def run(tau_map, speed=SPEED, jobs=3, thresholds=THR):
+    est = MapEstimator()
+    ctrl = GeofenceController(est, GeofenceConfig(thresholds_s=thresholds))
+    ctrl.reset(CAL)
+    img = np.zeros((CAM.height_px, CAM.width_px, 3), np.uint8)
+    est.tau = tau_map
+    cmds = [ctrl.act(Observation(0.1 * k, speed, img, img, 0.1, CAL), None) for k in range(jobs)]
+    return cmds
+
+
+def quiet(cmds):
+    return all(c.decel_mps2 == 0 and not c.warning for c in cmds)
+
+
+def test_the_road_ahead_alone_is_ignored():
+    assert quiet(run(road()))
+    est = MapEstimator()
+    est.tau = road()
+    assert est.geofence(None, None, [2.4])[0].sum() > 1000  # the fences do cover the road
+
+
+def test_a_car_in_the_adjacent_lane_is_ignored():
+    d = 20.0  # a static car 20 m ahead, one lane to the left: tau = d / v
+    assert quiet(run(add_box(road(), d, 3.5, d / SPEED)))
+    assert quiet(run(add_box(road(), d, -3.5, d / SPEED)))
+
+
+def test_an_oncoming_car_in_the_next_lane_is_ignored():
+    d = 40.0  # closing at twice the ego's speed
+    assert quiet(run(add_box(road(), d, 3.5, d / (2 * SPEED))))
+
+
+def test_a_car_in_the_corridor_fires_after_persistence_and_latches():
+    d = 20.0
+    tau_s = d / SPEED  # 1.44 s: inside the 1.8 s fence
+    cmds = run(add_box(road(), d, 0.0, tau_s), jobs=3)
+    assert quiet(cmds[:1])  # one job is not enough (persistence 2)
+    assert cmds[1].warning and cmds[1].decel_mps2 > 0  # the 1.8 s fence is nearest to partial: 1.6 + 1.5/13.9 s
+    assert cmds[1].telemetry["fence_fired_s"] == 1.8
+    assert cmds[1].view.counted.any()
+
+
+def test_a_half_overlapping_car_fires():
+    d = 20.0
+    assert not quiet(run(add_box(road(), d, 0.9, d / SPEED)))
+
+
+def test_one_fence_warns_and_brakes():
+    d = 20.0
+    cmds = run(add_box(road(), d, 0.0, d / SPEED), thresholds=(1.5,))
+    assert cmds[-1].warning and cmds[-1].decel_mps2 == 9.0
+
+
+def test_standing_ego_neither_warns_nor_brakes():
+    tau = np.full((CAM.height_px, CAM.width_px), np.inf)
+    assert quiet(run(add_box(tau, 10.0, 0.0, 1.0), speed=0.0))
+
+
+def test_default_thresholds_rule():
+    assert default_thresholds(1) == (1.4967,)
+    t = default_thresholds(4)
+    assert t[0] == 0.8 and t[-1] == 2.8 and np.allclose(np.diff(np.log(t)), math.log(3.5) / 3, atol=1e-4)
+
+
+@pytest.mark.parametrize("bad", [(), (0.0,), (-1.0,), (math.nan,), (1.0, 1.0), (math.inf,)])
+def test_bad_thresholds_are_refused(bad):
+    with pytest.raises(ConfigError, match="threshold"):
+        GeofenceConfig(thresholds_s=bad)
+
+
+def test_a_frame_interval_outside_the_trained_range_is_refused():
+    ctrl = GeofenceController(MapEstimator(), GeofenceConfig(thresholds_s=(0.3,)))
+    fast = Calibration.from_camera(CameraConfig(fps_hz=5.0), EGO_SIZE_M)  # 0.3 s at 0.2 s -> 0.15 s at 0.1 s
+    with pytest.raises(ConfigError, match="frame interval 0.2 s"):
+        ctrl.reset(fast)
