@@ -2,13 +2,16 @@
 
 Controllers are built from a registry of string entry points (as Gymnasium registers
 envs), so that listing them never imports torch: ``make("geofence", thresholds_s=(1.0,
-2.0))``. ``make("my_module:MyClass")`` loads a user's own ``Controller`` subclass.
+2.0))``. ``make("my_module:MyClass")`` (an importable module) or
+``make("path/to/file.py:MyClass")`` loads a user's own ``Controller`` subclass.
 """
 
 from __future__ import annotations
 
 import importlib
+import importlib.util
 import inspect
+from pathlib import Path
 from typing import Any
 
 from bittc_core.errors import ConfigError
@@ -28,13 +31,26 @@ ESTIMATOR_CONTROLLERS = ("geofence", "flow")
 
 
 def _load(entry: str, what: str):
-    module_name, sep, attr = entry.partition(":")
+    """'package.module:attr' (importable) or 'path/to/file.py:attr' -> the attribute."""
+    module_name, sep, attr = entry.rpartition(":")
     if not sep or not module_name or not attr:
-        raise ConfigError(f"controller {what!r}: expected a registered name ({', '.join(REGISTRY)}) or module:Class")
-    try:
-        module = importlib.import_module(module_name)
-    except ImportError as e:
-        raise ConfigError(f"controller {what!r}: cannot import module {module_name!r} ({e})") from None
+        raise ConfigError(f"controller {what!r}: expected a registered name ({', '.join(REGISTRY)}), module:Class "
+                          "or path/to/file.py:Class")
+    if module_name.endswith(".py"):
+        path = Path(module_name)
+        if not path.is_file():
+            raise ConfigError(f"controller {what!r}: no file {module_name!r}")
+        spec = importlib.util.spec_from_file_location(f"bittc_user_controller_{path.stem}", path)
+        module = importlib.util.module_from_spec(spec)
+        try:
+            spec.loader.exec_module(module)
+        except Exception as e:
+            raise ConfigError(f"controller {what!r}: cannot load {module_name!r} ({type(e).__name__}: {e})") from None
+    else:
+        try:
+            module = importlib.import_module(module_name)
+        except ImportError as e:
+            raise ConfigError(f"controller {what!r}: cannot import module {module_name!r} ({e})") from None
     try:
         return getattr(module, attr)
     except AttributeError:

@@ -12,8 +12,8 @@ Latency is not the policy's business: the loop charges the job's latency (measur
 fixed or from a device profile, see ``sim.latency``) and applies the command when the
 output is ready; the brake actuator's delay comes after that.
 
-Writing one (``--controller my_module:MyController`` loads it; see
-``examples/my_controller.py``)::
+Writing one (``--controller my_file.py:MyController`` or ``my_module:MyController``
+loads it; see ``examples/my_controller.py``)::
 
     class MyController(Controller):
         name = "mine"

@@ -1,8 +1,8 @@
-"""A controller of your own, loaded with ``--controller examples.my_controller:DistanceKeeper``.
+"""A controller of your own, loaded by its file's path.
 
 Run it (from the repository root)::
 
-    bittc run CCRs-30 --controller examples.my_controller:DistanceKeeper --latency fixed:20 --out runs/mine
+    bittc run CCRs-30 --controller examples/my_controller.py:DistanceKeeper --latency fixed:20 --out runs/mine
 
 It reuses the geofence controller's road geometry and the flow baseline, and brakes with
 a single fence whose threshold grows with speed: a deployable policy (frames, own speed,

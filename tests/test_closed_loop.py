@@ -43,10 +43,12 @@ def test_a_network_driven_run_brakes_for_a_stationary_target(tmp_path):
 
 
 def test_the_example_controller_runs(tmp_path):
+    """As the README runs it: the file's path, from any directory."""
     out = tmp_path / "mine"
+    example = ROOT / "examples" / "my_controller.py"
     r = subprocess.run([sys.executable, "-m", "bittc_core.cli", "run", "CCRs-30", "--controller",
-                        "examples.my_controller:DistanceKeeper", "--latency", "fixed:20", "--out", str(out)],
-                       cwd=ROOT, capture_output=True, text=True, timeout=300)
+                        f"{example}:DistanceKeeper", "--latency", "fixed:20", "--out", str(out)],
+                       cwd=tmp_path, capture_output=True, text=True, timeout=300)
     assert r.returncode == 0, r.stderr
     s = json.loads((out / "summary.json").read_text())
     assert s["controller"] == "distance-keeper" and s["t_first_brake_s"] is not None
@@ -66,6 +68,7 @@ def test_make_refuses_unknown_settings_and_non_controllers():
         (["--controller", "no_such_module:Thing"], "cannot import module 'no_such_module'"),
         (["--controller", "sim.latency:Nothing"], "has no attribute 'Nothing'"),
         (["--controller", "sim.latency:LatencyMode"], "not a subclass"),
+        (["--controller", "no/such/file.py:Thing"], "no file 'no/such/file.py'"),
         (["--controller", "geofence", "--num-alphas", "0"], "--num-alphas"),
         (["--controller", "geofence", "--ttc-thresholds", "0"], "threshold 0.0 s"),
         (["--controller", "geofence", "--ttc-thresholds", "-1"], "threshold -1.0 s"),
