@@ -34,7 +34,11 @@ estimator's map p_i = p(0 < tau <= tau_i)):
    for it).
    Rows count only when the ground one row below them is
    outside the fence too (near the horizon one row spans tens of metres).
-5. **Persistent**: the fence fires after ``persistence_frames`` consecutive jobs with
+5. **Nested** (``nested``): what lies inside tau_i lies inside every larger fence too,
+   so a fence's region counts only when some larger fence has one in the same job (the
+   largest fence stands alone). A far vehicle that the network reads into a middle
+   fence but not into the larger ones is noise.
+6. **Persistent**: the fence fires after ``persistence_frames`` consecutive jobs with
    such a region.
 
 **From the K fences to the stages** (``controllers.stages``, thresholds in bumper-to-
@@ -111,6 +115,7 @@ class GeofenceConfig:
     min_region_px: int = 8  # [px] smallest connected in-path region
     min_face_m2: float = 0.3  # [m^2] smallest face an obstacle shows at the fence's depth
     contact_px: int = 2  # [px] a region's bottom lies at most this far above the lowest counted row
+    nested: bool = True  # a fence's evidence counts only with evidence in a larger fence too
     persistence_frames: int = 2  # [jobs] consecutive jobs before a fence fires
     release_frames: int = 3  # [jobs] without any fence firing before braking is released
     min_speed_mps: float = 1.0  # [m/s] below this: no warning, no braking
@@ -241,6 +246,9 @@ class GeofenceController(Controller):
         c, s = self.cfg, float(obs.ego_speed_mps)
         sizes, counted, corridor = self._evidence(maps, s)
         hits = sizes >= c.min_region_px
+        if c.nested:  # what is inside tau_i is inside every larger fence too
+            larger = np.append(np.logical_or.accumulate(hits[::-1])[::-1][1:], True)
+            hits &= larger
         self._streak = np.where(hits, self._streak + 1, 0)
         fired = self._streak >= c.persistence_frames
         tau_hat = float(self._thr[np.argmax(fired)]) if fired.any() else None

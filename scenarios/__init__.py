@@ -28,6 +28,31 @@ def bundled() -> Catalog:
     return cat
 
 
+#: named sets of bundled families (``bittc scenarios --suites``); a suite resolves to every case of them
+SUITES: dict[str, str] = {
+    "ncap": "every Euro NCAP car-to-car case: CCRs, CCRs-offset, CCRm, CCRb",
+    "benign": "every benign scenario (no warning or brake expected)",
+    "all": "every bundled case",
+    "demo": "five cases for a quick look: CCRs-30, CCRs-50, CCRm-50, cut-in, benign-oncoming",
+}
+NCAP_FAMILIES = ("CCRs", "CCRs-offset", "CCRm", "CCRb")
+DEMO_CASES = ("CCRs-30", "CCRs-50", "CCRm-50", "cut-in", "benign-oncoming")
+
+
+def resolve_suite(name: str) -> list[ScenarioCase]:
+    """The cases of a suite (``SUITES``), or of a bundled name or YAML file (``resolve``)."""
+    cat = bundled()
+    if name == "ncap":
+        return [c for f in NCAP_FAMILIES for c in cat.families[f]]
+    if name == "benign":
+        return [c for cases in cat.families.values() for c in cases if not c.threat]
+    if name == "all":
+        return list(cat.cases.values())
+    if name == "demo":
+        return [cat.cases[n] for n in DEMO_CASES]
+    return resolve(name)
+
+
 def resolve(name_or_path: str) -> list[ScenarioCase]:
     """Cases for a bundled family, a bundled case, or a YAML file path."""
     if name_or_path.endswith((".yaml", ".yml")) or "/" in name_or_path:
@@ -44,4 +69,4 @@ def resolve(name_or_path: str) -> list[ScenarioCase]:
     raise ConfigError(f"unknown scenario {name_or_path!r}{hint}")
 
 
-__all__ = ["ScenarioCase", "bundled", "resolve", "load_file"]
+__all__ = ["ScenarioCase", "SUITES", "bundled", "resolve", "resolve_suite", "load_file"]

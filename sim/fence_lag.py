@@ -22,6 +22,7 @@ class FenceLagMeter:
     def __init__(self) -> None:
         self.cover_ttc_s: dict[float, float] = {}  # threshold [s] -> exact tau* at first cover [s]
         self.thresholds_s: tuple[float, ...] = ()
+        self.history: list[tuple[float, dict[str, float]]] = []  # (tau* [s], shares) per measured job
 
     def update(self, view, gt, critical) -> dict[str, float]:
         """``view``: a ``controllers.base.GeofenceView``; ``gt``: the job frame's
@@ -38,6 +39,7 @@ class FenceLagMeter:
             shares[f"{tau_i:g}"] = share
             if tau_i not in self.cover_ttc_s and share >= COVER_SHARE:
                 self.cover_ttc_s[tau_i] = tau_star
+        self.history.append((tau_star, shares))
         return shares
 
     def lag_s(self) -> dict[str, float | None]:

@@ -28,6 +28,13 @@ CLASSES = ("car", "car", "car", "gvt", "van", "truck")
 MAX_ACTORS = 12
 EGO_MAX_SPEED_MPS = 130 / 3.6  # [m/s]
 SIM_DT_S = 0.01  # [s]
+# braking cases ahead (``ahead_share``): what a collision-warning camera must fence on time
+AHEAD_MOTIONS = ("stationary", "slower", "braking")
+AHEAD_CLASSES = ("gvt", "car", "van", "truck")
+AHEAD_TTC_RANGE_S = (0.3, 4.0)  # [s] bumper-to-bumper TTC at the first frame, log-uniform
+AHEAD_OVERLAP = (0.25, 1.0)  # |share of the ego's width overlapped|, either side (Euro NCAP: 50-100 %)
+AHEAD_EGO_SPEED_MPS = (10 / 3.6, 130 / 3.6)  # [m/s]
+AHEAD_MAX_OTHER_ACTORS = 6
 
 
 @dataclass
@@ -105,12 +112,37 @@ def _actor_motion(rng: np.random.Generator, motion: str, road: RoadConfig, v_ego
     return x, lane_y, heading, speed, accel, keep
 
 
+def _ahead_actor(rng: np.random.Generator, v_ego: float, length_m: float, width_m: float):
+    """(x, y, heading, speed, accel, motion) of a braking case ahead of the ego in its lane.
+
+    Overlap O (share of the ego's width overlapped, Euro NCAP's definition for equal
+    widths): the target's centre sits (1 - |O|) (w_ego + w_target) / 2 to the left
+    (O > 0) or right (O < 0) of the ego's."""
+    motion = str(rng.choice(AHEAD_MOTIONS))
+    accel = 0.0
+    if motion == "stationary":
+        speed = 0.0
+    elif motion == "slower":
+        speed = v_ego * float(rng.uniform(0.0, 0.8))
+    else:
+        speed, accel = v_ego * float(rng.uniform(0.3, 1.0)), -float(rng.uniform(2.0, 8.0))
+    ttc = math.exp(rng.uniform(math.log(AHEAD_TTC_RANGE_S[0]), math.log(AHEAD_TTC_RANGE_S[1])))
+    gap = float(np.clip(ttc * max(v_ego - speed, 0.5), 2.0, X_RANGE_M[1]))
+    overlap = float(rng.uniform(*AHEAD_OVERLAP)) * float(rng.choice([-1.0, 1.0]))
+    y = math.copysign(1.0, overlap) * (1.0 - abs(overlap)) * (EGO_SIZE_M[1] + width_m) / 2
+    return EGO_SIZE_M[0] / 2 + gap + length_m / 2, y, 0.0, speed, accel, f"ahead-{motion}"
+
+
 def render_clip(sample_seed: int, base_camera: CameraConfig, clip_length: int, bank: TextureBank,
-                world: World | None = None) -> Clip:
+                world: World | None = None, ahead_share: float = 0.0) -> Clip:
     """Draw a scene from ``sample_seed`` and render ``clip_length`` frames of it.
 
     ``world``: a world built on ``bank`` to rebuild in place (``World.reset``) instead of
     building and closing a new one; the clip's bytes are the same either way.
+    ``ahead_share``: the probability that the scene also has a braking case ahead
+    (``_ahead_actor``; the ego then drives at 10-130 km/h, with at most
+    ``AHEAD_MAX_OTHER_ACTORS`` random actors). At 0 nothing more is drawn, so the bytes
+    are those of the datasets made before the option.
     """
     if world is not None and world.bank is not bank:
         raise ValueError("render_clip: the world must use the given texture bank")
@@ -119,6 +151,9 @@ def render_clip(sample_seed: int, base_camera: CameraConfig, clip_length: int, b
     road = random_road(rng)
     v_ego = 0.0 if rng.random() < 0.08 else float(rng.uniform(0.0, EGO_MAX_SPEED_MPS))
     ego_decel = float(rng.uniform(2.0, 7.0)) if rng.random() < 0.1 else 0.0
+    ahead = ahead_share > 0 and rng.random() < ahead_share
+    if ahead:
+        v_ego = float(rng.uniform(*AHEAD_EGO_SPEED_MPS))
     hw_road = build_road(road, seed=sample_seed % (2**31))
     n_sub = max(1, int(round(camera.dt_s / SIM_DT_S)))
     sim_dt = camera.dt_s / n_sub
@@ -133,7 +168,14 @@ def render_clip(sample_seed: int, base_camera: CameraConfig, clip_length: int, b
     try:
         actors = []
         taken = [footprint_corners(0.0, 0.0, 0.0, EGO_SIZE_M[0] + 2.0, EGO_SIZE_M[1] + 1.0)]
-        for _ in range(int(rng.integers(0, MAX_ACTORS + 1))):
+        if ahead:
+            spec = sample_spec(rng, str(rng.choice(AHEAD_CLASSES)))
+            x, y, heading, speed, accel, motion = _ahead_actor(rng, v_ego, spec.length_m, spec.width_m)
+            taken.append(footprint_corners(x, y, heading, spec.length_m + 1.0, spec.width_m + 0.5))
+            veh = ScriptedVehicle(hw_road, x, y, heading, speed, spec.length_m, spec.width_m, accel_mps2=accel)
+            hw_road.vehicles.append(veh)
+            actors.append((world.add_vehicle(spec), spec, veh, motion))
+        for _ in range(int(rng.integers(0, (AHEAD_MAX_OTHER_ACTORS if ahead else MAX_ACTORS) + 1))):
             motion = str(rng.choice(MOTIONS))
             spec = sample_spec(rng, str(rng.choice(CLASSES)))
             for _attempt in range(5):

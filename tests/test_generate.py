@@ -124,6 +124,7 @@ def test_dataset_tensors_have_documented_shapes_and_flip_consistently(tmp_path):
         (["--samples", "2", "--seed", "1", "--clip-length", "1"], "--clip-length 1"),
         (["--samples", "2", "--seed", "1", "--ground-texture", "gravel"], "--ground-texture 'gravel'"),
         (["--samples", "2", "--seed", "1", "--vehicle-texture", "chrome"], "--vehicle-texture 'chrome'"),
+        (["--samples", "2", "--seed", "1", "--ahead-share", "1.5"], "--ahead-share 1.5"),
     ],
 )
 def test_bad_generate_flags(tmp_path, capsys, argv, needle):
@@ -146,16 +147,18 @@ def test_foreign_or_mismatched_dir_is_refused(tmp_path, capsys):
 
 
 @pytest.mark.parametrize("key, old_value, flag, other", [("ground_texture", "smooth", "--ground-texture", "detailed"),
-                                                         ("vehicle_texture", "plain", "--vehicle-texture", "detailed")])
+                                                         ("vehicle_texture", "plain", "--vehicle-texture", "detailed"),
+                                                         ("ahead_share", "0.0", "--ahead-share", "0.5")])
 def test_datasets_made_before_a_texture_option_count_as_its_old_style(tmp_path, capsys, key, old_value, flag, other):
     ds = tmp_path / "ds"
-    old = GenerationConfig(seed=3, height_px=48, width_px=144, **{key: old_value})
+    shown = float(old_value) if key == "ahead_share" else old_value
+    old = GenerationConfig(seed=3, height_px=48, width_px=144, **{key: shown})
     generate(ds, old, "train", 1, workers=1, backend="local", progress=False)
     gen = ds / "generation.yaml"
     gen.write_text("".join(line for line in gen.read_text().splitlines(True) if not line.startswith(key)))
     common = ["generate", "--out", str(ds), "--samples", "2", "--seed", "3", "--size", "48x144", "--no-progress"]
     assert main([*common, flag, other]) == 2
-    assert f"{key} = {old_value!r}" in capsys.readouterr().err
+    assert f"{key} = {shown!r}" in capsys.readouterr().err
     assert main([*common, flag, old_value]) == 0
     assert (ds / "train" / "000001" / "meta.json").exists()
 
@@ -175,3 +178,24 @@ def test_data_stats_match_the_card(tmp_path, capsys):
     assert stats["tau_histogram_actor_px"] == card["tau_histogram_actor_px"]
     manifest = [json.loads(line) for line in (tmp_path / "manifest.jsonl").read_text().splitlines()]
     assert [m["seed"] for m in manifest] == [1_000_000_000, 1_000_000_001]
+
+
+def test_braking_cases_ahead(tmp_path):
+    """With --ahead-share 1 every sample has a vehicle in or near the ego's lane at 0.3-4 s
+    bumper TTC, the ego at 10-130 km/h."""
+    from dataclasses import replace
+
+    from sim.vehicles import EGO_SIZE_M
+
+    generate(tmp_path / "a", replace(SMALL, ahead_share=1.0), "train", 6, workers=1, backend="local", progress=False)
+    for d in sorted((tmp_path / "a" / "train").iterdir()):
+        _, _, meta = read_sample(d)
+        target = meta["actors"][0]
+        assert target["motion"].startswith("ahead-") and target["kind"] in ("gvt", "car", "van", "truck")
+        f0 = meta["frames"][0]
+        ego, a = f0["ego"], next(x for x in f0["actors"] if x["instance"] == target["instance"])
+        assert 10 / 3.6 - 1e-6 <= ego["speed_mps"] <= 130 / 3.6 + 1e-6
+        assert abs(a["y_m"] - ego["y_m"]) <= 0.75 * (EGO_SIZE_M[1] + target["width_m"]) / 2 + 1e-6
+        gap = a["x_m"] - target["length_m"] / 2 - (ego["x_m"] + EGO_SIZE_M[0] / 2)
+        closing = ego["speed_mps"] - a["speed_mps"]
+        assert gap >= 2.0 - 1e-6 and (closing <= 0.5 or 0.3 - 1e-6 <= gap / closing <= 4.0 + 1e-6)

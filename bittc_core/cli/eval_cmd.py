@@ -5,6 +5,13 @@ with miou, mid, error_rate, actor_iou, latency_ms and a breakdown of where the
 errors are (see ``bittc_core.metrics``).
 Latency: wall time per pair of the estimator calls (geofence for all metric
 thresholds + continuous), frames fed in dataset order.
+
+`bittc eval --scenarios SUITE --method {bittc,flow}` instead renders the cases of a
+suite (`bittc scenarios --suites`) or scenario open loop and measures the geofences on
+what braking needs: per case and threshold the fence lag of the critical actor, the
+share of it inside each fence against its exact TTC (--plot), and the stray in-path
+evidence of the benign cases (see ``sim.scenario_eval``); JSON (default
+eval_<method>_scenarios_<suite>.json) and a table.
 """
 
 from __future__ import annotations
@@ -26,7 +33,13 @@ SPLITS = ("train", "val", "test")
 def add_parser(sub) -> argparse.ArgumentParser:
     p = sub.add_parser("eval", help="evaluate an estimator on a dataset split",
                        description=__doc__.split("\n\n", 1)[1])
-    p.add_argument("--data", required=True, help="dataset folder, or 'synthetic'")
+    p.add_argument("--data", default=None, help="dataset folder, or 'synthetic'")
+    p.add_argument("--scenarios", default=None, metavar="SUITE",
+                   help="instead of --data: a suite (ncap, benign, all, demo), a bundled name or a YAML file")
+    p.add_argument("--tau", type=float, nargs="+", default=[0.9, 1.6, 2.4], metavar="S",
+                   help="with --scenarios: the fences' thresholds [s] (default 0.9 1.6 2.4)")
+    p.add_argument("--plot", default=None, help="with --scenarios: also write this PNG of the inside-share curve")
+    p.add_argument("--seed", type=int, default=0, help="with --scenarios: scenery seed (default 0)")
     p.add_argument("--method", required=True, help="bittc, flow, oracle, or oracle-auc (exact geofences; "
                    "continuous output from their AUC at the shipped network's levels: the floor of its AUC)")
     p.add_argument("--weights", default=None, help="checkpoint for bittc (default: shipped weights)")
@@ -40,6 +53,8 @@ def add_parser(sub) -> argparse.ArgumentParser:
 
 
 def _check(args) -> Path:
+    if (args.data is None) == (args.scenarios is None):
+        raise CliError("give --data DIR (a dataset split) or --scenarios SUITE (scenario cases), one of them")
     if args.method not in METHODS:
         raise CliError(f"--method {args.method!r}: expected one of {METHODS}")
     if args.split not in SPLITS:
@@ -53,7 +68,21 @@ def _check(args) -> Path:
     if args.tta != "none" and args.method != "bittc":
         raise CliError(f"--tta {args.tta!r} applies to --method bittc only, not {args.method!r}")
     check_device(args.device)
-    out = Path(args.out or f"eval_{args.method}_{args.split}.json")
+    if args.scenarios is not None:
+        if args.method not in ("bittc", "flow"):
+            raise CliError(f"--method {args.method!r}: --scenarios evaluates bittc or flow (the oracle reads the "
+                           "dataset's ground truth)")
+        from controllers.geofence import check_thresholds
+
+        try:
+            args.tau = check_thresholds(args.tau)
+        except CliError as e:
+            raise CliError(f"--tau: {e}") from None
+        if args.plot is not None and not args.plot.endswith(".png"):
+            raise CliError(f"--plot {args.plot!r}: expected a .png file")
+    default = f"eval_{args.method}_scenarios_{Path(args.scenarios).stem}.json" if args.scenarios else \
+        f"eval_{args.method}_{args.split}.json"
+    out = Path(args.out or default)
     if out.suffix != ".json":
         raise CliError(f"--out {str(out)!r}: expected a .json file")
     if not out.parent.exists():
@@ -119,8 +148,37 @@ def format_table(r: dict) -> str:
     return "\n".join(lines)
 
 
+def run_scenarios(args, out: Path) -> int:
+    import os
+
+    import scenarios
+    from bittc_core.estimator import make_estimator
+    from sim import scenario_eval
+    from sim.camera import CameraConfig
+
+    cases = scenarios.resolve_suite(args.scenarios)
+    estimator = make_estimator(args.method, weights=args.weights, device=args.device, tta=args.tta)
+    from tqdm import tqdm
+
+    results = [scenario_eval.evaluate_case(c, estimator, args.tau, CameraConfig(), args.seed)
+               for c in tqdm(cases, desc="cases", unit="case", leave=False)]
+    summary = {"method": args.method, "weights": args.weights, "scenarios": args.scenarios, "seed": args.seed,
+               **scenario_eval.summarize(results, args.tau)}  # fmt: skip
+    print(scenario_eval.format_table(summary))
+    if args.plot:
+        tmp = Path(args.plot).with_name(f".{Path(args.plot).name}.tmp.png")
+        scenario_eval.plot_inside_share(summary, tmp, f"{args.method} on {args.scenarios} ({len(cases)} cases)")
+        os.replace(tmp, args.plot)
+        print(f"wrote {args.plot}")
+    write_text_atomic(out, json.dumps(summary, indent=2))
+    print(f"wrote {out}")
+    return 0
+
+
 def run(args) -> int:
     out = _check(args)
+    if args.scenarios is not None:
+        return run_scenarios(args, out)
     from bittc_core.estimator import make_estimator
     from bittc_core.train.data import open_split
 

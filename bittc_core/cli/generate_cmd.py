@@ -27,6 +27,10 @@ def add_parser(sub) -> argparse.ArgumentParser:
     p.add_argument("--vehicle-texture", default="plain",
                    help="vehicle paint and glass: plain (default, as in bittc_v1 and bittc_v2) or detailed (shading "
                         "and spots inside the outline whose motion can be measured, as in bittc_v3)")  # fmt: skip
+    p.add_argument("--ahead-share", type=float, default=0.0, metavar="SHARE",
+                   help="this share of the samples has a braking case ahead: a GVT, car, van or truck in or near "
+                        "the ego's lane (overlap 25-100 %% on either side), stationary, slower or braking, at 0.3-4 s TTC, ego "
+                        "10-130 km/h, beside the random scene (default 0: random scenes only, as in bittc_v1-v3)")
     p.add_argument("--workers", type=int, default=1)
     p.add_argument("--backend", default="local", help="local (process pool, default) or ray")
     p.add_argument("--ray-address", default=None, help="address of an existing Ray cluster (default: start a local one)")
@@ -39,7 +43,8 @@ def run(args) -> int:
 
     h, w = parse_size(args.size)
     cfg = GenerationConfig(seed=args.seed, height_px=h, width_px=w, fps_hz=args.fps, clip_length=args.clip_length, supersample=args.supersample,
-                           ground_texture=args.ground_texture, vehicle_texture=args.vehicle_texture)
+                           ground_texture=args.ground_texture, vehicle_texture=args.vehicle_texture,
+                           ahead_share=args.ahead_share)
     stats = generate(Path(args.out), cfg, args.split, args.samples, args.workers, args.backend, args.ray_address, progress=not args.no_progress)
     print(json.dumps(stats))
     return 0

@@ -10,11 +10,16 @@ import scenarios
 def add_parser(sub) -> argparse.ArgumentParser:
     p = sub.add_parser("scenarios", help="list bundled scenarios")
     p.add_argument("--cases", action="store_true", help="list every expanded case, not only families")
+    p.add_argument("--suites", action="store_true", help="list the named suites (ncap, benign, all, demo)")
     return p
 
 
 def run(args) -> int:
     cat = scenarios.bundled()
+    if args.suites:
+        for name, what in scenarios.SUITES.items():
+            print(f"{name:<8} {len(scenarios.resolve_suite(name)):>3} cases  {what}")
+        return 0
     for family, cases in cat.families.items():
         kind = "threat" if cases[0].threat else "benign"
         if args.cases:

@@ -49,6 +49,7 @@ class GenerationConfig:
     supersample: int = 1  # render at this factor and average down
     ground_texture: str = "detailed"  # sim.textures.GROUND_STYLES; "smooth" = bittc_v1's ground
     vehicle_texture: str = "plain"  # sim.textures.VEHICLE_STYLES; "detailed" = bittc_v3's vehicles
+    ahead_share: float = 0.0  # share of samples with a braking case ahead (sim.random_scene.AHEAD_*)
 
     def __post_init__(self) -> None:
         if self.seed < 0:
@@ -57,6 +58,8 @@ class GenerationConfig:
             raise CliError(f"--clip-length {self.clip_length}: must be in [2, 32]")
         if not 1.0 <= self.fps_hz <= 100.0:
             raise CliError(f"--fps {self.fps_hz}: must be in [1, 100] Hz")
+        if not 0.0 <= self.ahead_share <= 1.0:
+            raise CliError(f"--ahead-share {self.ahead_share}: must be in [0, 1]")
         if self.supersample not in (1, 2, 3, 4):
             raise CliError(f"--supersample {self.supersample}: must be 1, 2, 3 or 4")
         texture_style(self.ground_texture, self.vehicle_texture)
@@ -120,7 +123,8 @@ def make_sample(cfg_dict: dict, split_dir: str, split: str, index: int) -> tuple
             gc.collect()
             gc.freeze()  # what exists now lives as long as the worker
             gc.set_threshold(*GC_THRESHOLDS)
-        clip = render_clip(scene_seed(cfg, split, index), _WORKER["camera"], cfg.clip_length, _WORKER["bank"], _WORKER["world"])
+        clip = render_clip(scene_seed(cfg, split, index), _WORKER["camera"], cfg.clip_length, _WORKER["bank"], _WORKER["world"],
+                           ahead_share=cfg.ahead_share)
         write_sample(Path(split_dir), index, clip, {"split": split, "index": index, "seed": sample_seed(split, index), "dataset_seed": cfg.seed})
         return index, time.perf_counter() - t0, None
     except Exception:  # reported to the driver, retried there with a fresh world
@@ -149,6 +153,7 @@ def prepare_dir(out: Path, cfg: GenerationConfig) -> None:
             raise CliError(f"{gen}: not a mapping of generation settings; remove the folder or choose another --out")
         old.setdefault("ground_texture", "smooth")  # datasets made before the option had the smooth ground
         old.setdefault("vehicle_texture", "plain")  # and the plain vehicles
+        old.setdefault("ahead_share", 0.0)  # and no braking cases ahead
         mine = asdict(cfg)
         for k in sorted(set(old) | set(mine)):
             if old.get(k) != mine.get(k):

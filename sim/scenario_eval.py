@@ -1,0 +1,185 @@
+"""The geofence on what braking needs: an estimator measured on scenario cases, open loop.
+
+Every case is rendered with exact ground truth and no braking (the ego keeps its speed
+until the run ends as ``ScenarioSim.done`` says, a collision included). The estimator
+runs on every frame pair, as the closed loop would with no latency, behind the geofence
+controller's evidence rules (``controllers.geofence``), whose decisions are recorded but
+never applied. Per case and threshold tau_i (camera-plane TTC [s] from the latest frame):
+
+* ``fence_lag_s``: tau_i minus the critical actor's exact camera-plane TTC at the first
+  frame where fence i covers at least half of its pixels (``sim.fence_lag``); None when it
+  never does;
+* the share of the critical actor inside each fence against its exact TTC (binned in
+  ``TAU_BINS_S``; the curve of ``plot_inside_share``);
+* on benign cases, the in-path evidence the controller would have counted ("stray"): the
+  frames with an in-path region per fence and the longest run of consecutive frames.
+"""
+
+from __future__ import annotations
+
+import statistics
+from dataclasses import dataclass
+
+import numpy as np
+
+from controllers.base import BrakeCommand, Controller, Observation
+from controllers.geofence import GeofenceConfig, GeofenceController
+from scenarios.spec import ScenarioCase
+from sim.camera import CameraConfig
+from sim.episode import ScenarioSim
+from sim.fence_lag import FenceLagMeter
+from sim.latency import parse_latency
+from sim.loop import ClosedLoop
+
+TAU_BINS_S = (0.0, 0.25, 0.5, 0.75, 1.0, 1.25, 1.5, 1.75, 2.0, 2.5, 3.0, 3.5, 4.0, 5.0)  # [s] exact tau* bins
+FAST_KPH = (60.0, 80.0)  # [km/h] ego speeds of the 'fast' lag median
+
+
+class OpenLoopProbe(Controller):
+    """Runs ``inner`` and records what it saw and decided; never brakes."""
+
+    needs_camera = True
+
+    def __init__(self, inner: GeofenceController) -> None:
+        self.inner = inner
+        self.name = f"{inner.name}-open-loop"
+        self.num_alphas = inner.num_alphas
+        self.frame_stride = inner.frame_stride
+
+    def reset(self, calibration) -> None:
+        self.inner.reset(calibration)
+        self.telemetry: list[dict] = []
+        self.decided: list[BrakeCommand] = []
+
+    def act(self, obs: Observation, truth) -> BrakeCommand:
+        cmd = self.inner.act(obs, None)
+        self.telemetry.append(dict(cmd.telemetry))
+        self.decided.append(cmd)
+        return BrakeCommand(view=cmd.view)  # the view feeds the fence-lag meter, the brake stays off
+
+
+@dataclass(frozen=True)
+class CaseResult:
+    name: str
+    threat: bool
+    ego_speed_kph: float
+    fence_lag_s: dict  # '<tau>' -> lag [s] or None
+    history: list  # (tau* [s], {'<tau>': share inside}) per measured frame
+    stray_frames: dict  # '<tau>' -> frames with an in-path region (benign cases)
+    stray_max_run: dict  # '<tau>' -> longest run of such consecutive frames
+    would_warn: bool  # the controller's decisions (not applied) included a warning
+
+
+def evaluate_case(case: ScenarioCase, estimator, thresholds_s, camera: CameraConfig, seed: int = 0) -> CaseResult:
+    probe = OpenLoopProbe(GeofenceController(estimator, GeofenceConfig(thresholds_s=tuple(thresholds_s))))
+    sim = ScenarioSim(case, camera, seed, render=True)
+    lag = FenceLagMeter()
+    try:
+        loop = ClosedLoop(sim, parse_latency("fixed:0"), num_alphas=probe.num_alphas, pairs=True, lag_meter=lag)
+        loop.drive(probe)
+    finally:
+        sim.close()
+    keys = [f"{t:g}" for t in sorted(thresholds_s)]
+    stray, runs = {}, {}
+    for k in keys:
+        hits = [int(t.get(f"inpath_px_{k}s", 0)) > 0 for t in probe.telemetry]
+        stray[k] = sum(hits)
+        best = cur = 0
+        for h in hits:
+            cur = cur + 1 if h else 0
+            best = max(best, cur)
+        runs[k] = best
+    warned = any(c.warning or c.decel_mps2 > 0 for c in probe.decided)
+    return CaseResult(case.name, case.threat, case.ego.speed_kph, lag.lag_s(), lag.history, stray, runs, warned)
+
+
+def _median(values) -> float | None:
+    v = [x for x in values if x is not None]
+    return round(statistics.median(v), 4) if v else None
+
+
+def inside_share_curve(results: list[CaseResult], keys: list[str]) -> dict:
+    """'<tau>' -> list of (bin centre [s], mean share inside, frames) over the threat cases."""
+    edges = np.asarray(TAU_BINS_S)
+    out = {}
+    for k in keys:
+        taus = np.array([t for r in results if r.threat for t, sh in r.history if k in sh])
+        shares = np.array([sh[k] for r in results if r.threat for t, sh in r.history if k in sh])
+        rows = []
+        for lo, hi in zip(edges[:-1], edges[1:]):
+            m = (taus >= lo) & (taus < hi)
+            if m.any():
+                rows.append([round((lo + hi) / 2, 3), round(float(shares[m].mean()), 4), int(m.sum())])
+        out[k] = rows
+    return out
+
+
+def summarize(results: list[CaseResult], thresholds_s) -> dict:
+    keys = [f"{t:g}" for t in sorted(thresholds_s)]
+    threats = [r for r in results if r.threat]
+    fast = [r for r in threats if FAST_KPH[0] <= r.ego_speed_kph <= FAST_KPH[1]]
+    benign = [r for r in results if not r.threat]
+    return {
+        "thresholds_s": [float(k) for k in keys],
+        "fence_lag_s": {k: _median(r.fence_lag_s.get(k) for r in threats) for k in keys},
+        "fence_lag_s_fast": {k: _median(r.fence_lag_s.get(k) for r in fast) for k in keys},
+        "fence_never_covered": {k: sum(r.fence_lag_s.get(k) is None for r in threats) for k in keys},
+        "threat_cases": len(threats),
+        "fast_cases": len(fast),
+        "benign_cases": len(benign),
+        "benign_stray_over_2_frames": {k: sum(r.stray_max_run[k] > 2 for r in benign) for k in keys},
+        "benign_would_warn": sum(r.would_warn for r in benign),
+        "inside_share_by_tau": inside_share_curve(results, keys),
+        "per_case": {
+            r.name: {"threat": r.threat, "ego_speed_kph": r.ego_speed_kph, "fence_lag_s": r.fence_lag_s,
+                     **({"stray_frames": r.stray_frames, "stray_max_run_frames": r.stray_max_run,
+                         "would_warn": r.would_warn} if not r.threat else {})}
+            for r in results
+        },
+    }  # fmt: skip
+
+
+def format_table(summary: dict) -> str:
+    keys = [f"{t:g}" for t in summary["thresholds_s"]]
+    head = f"{'case':<28}" + "".join(f"{'lag@' + k + 's':>11}" for k in keys) + "   stray run (benign)"
+    lines = [head, "-" * len(head)]
+    for name, r in summary["per_case"].items():
+        lags = "".join(f"{('-' if r['fence_lag_s'].get(k) is None else format(r['fence_lag_s'][k], '.2f')):>11}" for k in keys)
+        extra = "   " + "/".join(str(r["stray_max_run_frames"][k]) for k in keys) if not r["threat"] else ""
+        lines.append(f"{name:<28}{lags}{extra}")
+    lines.append("-" * len(head))
+
+    def row(label, d):
+        return f"{label:<28}" + "".join(f"{('-' if d[k] is None else format(d[k], '.2f')):>11}" for k in keys)
+
+    lines.append(row(f"median ({summary['threat_cases']} threats)", summary["fence_lag_s"]))
+    lines.append(row(f"median, 60-80 km/h ({summary['fast_cases']})", summary["fence_lag_s_fast"]))
+    lines.append(f"{'never covered':<28}" + "".join(f"{summary['fence_never_covered'][k]:>11}" for k in keys))
+    lines.append(f"benign cases with in-path evidence over 2 frames: "
+                 + ", ".join(f"{k} s: {v}/{summary['benign_cases']}" for k, v in summary["benign_stray_over_2_frames"].items())
+                 + f"; the controller would warn in {summary['benign_would_warn']}/{summary['benign_cases']}")
+    return "\n".join(lines)
+
+
+def plot_inside_share(summary: dict, path, title: str) -> None:
+    """The share of the critical actor inside each fence against its exact TTC (PNG)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(7, 4), dpi=110)
+    for k, rows in summary["inside_share_by_tau"].items():
+        if rows:
+            x, y, _ = zip(*rows)
+            line = ax.plot(x, y, marker="o", label=f"fence {k} s")[0]
+            ax.axvline(float(k), color=line.get_color(), linestyle=":", linewidth=1)
+    ax.axhline(0.5, color="grey", linewidth=0.8)
+    ax.set_xlabel("exact camera-plane TTC of the critical actor [s]")
+    ax.set_ylabel("share of its pixels inside the fence")
+    ax.set_ylim(0, 1.02)
+    ax.set_title(title, fontsize=10)
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
