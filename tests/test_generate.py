@@ -90,8 +90,8 @@ def test_dataset_tensors_have_documented_shapes_and_flip_consistently(tmp_path):
     plain = TTCDataset(tmp_path, "train")[0]
     expect = {"image_prev": ((3, 48, 144), torch.float32), "image_latest": ((3, 48, 144), torch.float32),
               "eta": ((48, 144), torch.float32), "tau_s": ((48, 144), torch.float32), "flow_px": ((2, 48, 144), torch.float32),
-              "valid": ((48, 144), torch.bool), "instance": ((48, 144), torch.int64), "dt_s": ((), torch.float32),
-              "intrinsics": ((4,), torch.float32), "ego_speed_mps": ((), torch.float32)}  # fmt: skip
+              "valid": ((48, 144), torch.bool), "instance": ((48, 144), torch.int64), "inpath": ((48, 144), torch.bool),
+              "dt_s": ((), torch.float32), "intrinsics": ((4,), torch.float32), "ego_speed_mps": ((), torch.float32)}  # fmt: skip
     assert set(plain) == set(expect)
     for k, (shape, dtype) in expect.items():
         assert tuple(plain[k].shape) == shape and plain[k].dtype == dtype, k
@@ -199,3 +199,6 @@ def test_braking_cases_ahead(tmp_path):
         gap = a["x_m"] - target["length_m"] / 2 - (ego["x_m"] + EGO_SIZE_M[0] / 2)
         closing = ego["speed_mps"] - a["speed_mps"]
         assert gap >= 2.0 - 1e-6 and (closing <= 0.5 or 0.3 - 1e-6 <= gap / closing <= 4.0 + 1e-6)
+    items = [TTCDataset(tmp_path / "a", "train")[i] for i in range(6)]
+    assert sum(bool(it["inpath"].any()) for it in items) >= 3  # the targets ahead are in the path
+    assert all(not (it["inpath"] & (it["instance"] <= 0)).any() for it in items)  # vehicles only

@@ -149,7 +149,7 @@ def test_labels():
 def args(**kw):
     base = dict(data="synthetic", config="tiny", out="m.pt", resume=False, init=None, seed=0, steps=10,
                 batch_size=2, lr=3e-4, warmup_steps=2, val_every=5, val_limit=4, device="cpu", stage="binary",
-                freeze_binary=False, actor_weight=1.0, lovasz_weight=0.0, teacher=None, distill_weight=None,
+                freeze_binary=False, actor_weight=1.0, inpath_weight=1.0, lovasz_weight=0.0, teacher=None, distill_weight=None,
                 pixel_thresholds=0.0, lr_mult=[], keep_checkpoints=False)
     base.update(kw)
     return argparse.Namespace(**base)
@@ -167,6 +167,7 @@ def args(**kw):
     (dict(seed=-1), "--seed -1"),
     (dict(resume=True, init="x.pt"), "exclude"),
     (dict(actor_weight=0.0), "--actor-weight 0.0"),
+    (dict(inpath_weight=-2.0), "--inpath-weight -2.0"),
     (dict(lovasz_weight=-1.0), "--lovasz-weight -1.0"),
     (dict(freeze_binary=True), "--freeze-binary applies to the continuous stage, not --stage 'binary'"),
     (dict(teacher="missing.pt"), "--teacher 'missing.pt': no such file"),

@@ -46,6 +46,9 @@ def add_parser(sub) -> argparse.ArgumentParser:
     p.add_argument("--stage", default="binary", help="flow, binary, continuous or all (default binary)")
     p.add_argument("--actor-weight", type=float, default=1.0,
                    help="binary stage: loss weight of moving-actor pixels, static pixels 1 (default 1)")
+    p.add_argument("--inpath-weight", type=float, default=1.0,
+                   help="binary stage: loss weight of in-path vehicle pixels (within 1.5 m of the camera's axis, "
+                        "nearer than 80 m), instead of --actor-weight there (default 1)")
     p.add_argument("--lovasz-weight", type=float, default=0.0,
                    help="binary stage: add this weight x a Lovasz surrogate of the per-map two-class IoU "
                         "to the BCE (default 0)")
@@ -89,6 +92,8 @@ def _check(args) -> None:
         raise CliError(f"--out {args.out!r}: expected a file name ending in .pt")
     if not 0 < args.actor_weight < math.inf:
         raise CliError(f"--actor-weight {args.actor_weight}: must be > 0 and finite")
+    if not 0 < args.inpath_weight < math.inf:
+        raise CliError(f"--inpath-weight {args.inpath_weight}: must be > 0 and finite")
     if not 0 <= args.lovasz_weight < math.inf:
         raise CliError(f"--lovasz-weight {args.lovasz_weight}: must be >= 0 and finite")
     if not 0 <= args.pixel_thresholds <= 1:
@@ -211,7 +216,8 @@ def run(args) -> int:
 
     base = TrainConfig(steps=args.steps, batch_size=args.batch_size, lr=args.lr, warmup_steps=args.warmup_steps,
                        val_every=args.val_every, val_limit=args.val_limit, seed=args.seed,
-                       actor_weight=args.actor_weight, lovasz_weight=args.lovasz_weight,
+                       actor_weight=args.actor_weight, inpath_weight=args.inpath_weight,
+                       lovasz_weight=args.lovasz_weight,
                        distill_weight=distill_weight, pixel_threshold_share=args.pixel_thresholds,
                        lr_mults=lr_mults, keep_checkpoints=args.keep_checkpoints)
     stage_cfgs = {stage: dataclasses.replace(base, stage=stage,

@@ -8,6 +8,8 @@ Each item is one frame pair (by default the last pair of the clip), as a dict:
     flow_px                   float32 (2, H, W) (u, v) = latest - previous position [px]
     valid                     bool    (H, W)
     instance                  int64   (H, W)   -1 sky, 0 static, > 0 vehicle
+    inpath                    bool    (H, W)   vehicle pixels within INPATH_HALF_WIDTH_M of the
+                                               optical axis, nearer than INPATH_MAX_DEPTH_M
     dt_s                      float32 ()       frame interval [s]
     intrinsics                float32 (4,)     fx, fy, cx, cy [px]
     ego_speed_mps             float32 ()       ego speed at the latest frame [m/s]
@@ -27,6 +29,9 @@ from pathlib import Path
 import numpy as np
 import torch
 from torch.utils.data import Dataset
+
+INPATH_HALF_WIDTH_M = 1.5  # [m] |X| of the camera frame: the ego's half width plus a margin
+INPATH_MAX_DEPTH_M = 80.0  # [m]
 
 from bittc_core.data.format import SPLITS, read_sample
 from bittc_core.errors import CliError
@@ -67,7 +72,7 @@ class TTCDataset(Dataset):
         j = int(rng.integers(n_pairs)) if self.pair == "random" else (self.pair % n_pairs)
         prev, latest = frames[j].astype(np.float32) / 255.0, frames[j + 1].astype(np.float32) / 255.0
         eta, tau, flow = gt["eta"][j], gt["tau_s"][j], gt["flow_px"][j].copy()
-        valid, inst = gt["valid"][j], gt["instance"][j].astype(np.int64)
+        valid, inst, depth = gt["valid"][j], gt["instance"][j].astype(np.int64), gt["depth_m"][j]
         intr = meta["intrinsics"]
         K = np.array([intr["fx_px"], intr["fy_px"], intr["cx_px"], intr["cy_px"]], np.float32)
         H, W = eta.shape
@@ -79,18 +84,20 @@ class TTCDataset(Dataset):
             x0 = int(round(K[2] - (cw - 1) / 2))
             y0, x0 = min(max(y0, 0), H - ch), min(max(x0, 0), W - cw)
             sl = (slice(y0, y0 + ch), slice(x0, x0 + cw))
-            prev, latest, eta, tau, flow, valid, inst = (a[sl] for a in (prev, latest, eta, tau, flow, valid, inst))
+            prev, latest, eta, tau, flow, valid, inst, depth = (a[sl] for a in (prev, latest, eta, tau, flow, valid, inst, depth))
             K = K - np.array([0, 0, x0, y0], np.float32)
             H, W = ch, cw
         if self.augment:
             if rng.random() < 0.5:
-                prev, latest, eta, tau, flow, valid, inst = (a[:, ::-1] for a in (prev, latest, eta, tau, flow, valid, inst))
+                prev, latest, eta, tau, flow, valid, inst, depth = (a[:, ::-1] for a in (prev, latest, eta, tau, flow, valid, inst, depth))
                 flow = flow * np.array([-1.0, 1.0], np.float32)
                 K = K.copy()
                 K[2] = W - 1 - K[2]
             gain = rng.uniform(0.9, 1.1, 3).astype(np.float32)
             bright, contrast, gamma = rng.uniform(-0.1, 0.1), rng.uniform(0.8, 1.2), rng.uniform(0.8, 1.25)
             prev, latest = (np.clip(((x**gamma) * gain - 0.5) * contrast + 0.5 + bright, 0.0, 1.0) for x in (prev, latest))
+        lateral_m = np.abs(np.arange(W, dtype=np.float32) - K[2])[None, :] / K[0] * depth
+        inpath = (inst > 0) & valid & (lateral_m < INPATH_HALF_WIDTH_M) & (depth < INPATH_MAX_DEPTH_M)
         return {
             "image_prev": torch.from_numpy(np.ascontiguousarray(prev.transpose(2, 0, 1), np.float32)),
             "image_latest": torch.from_numpy(np.ascontiguousarray(latest.transpose(2, 0, 1), np.float32)),
@@ -99,6 +106,7 @@ class TTCDataset(Dataset):
             "flow_px": torch.from_numpy(np.ascontiguousarray(flow.transpose(2, 0, 1), np.float32)),
             "valid": torch.from_numpy(np.ascontiguousarray(valid, np.bool_)),
             "instance": torch.from_numpy(np.ascontiguousarray(inst, np.int64)),
+            "inpath": torch.from_numpy(np.ascontiguousarray(inpath, np.bool_)),
             "dt_s": torch.tensor(float(meta["dt_s"]), dtype=torch.float32),
             "intrinsics": torch.from_numpy(K.astype(np.float32)),
             "ego_speed_mps": torch.tensor(float(meta["frames"][j + 1]["ego"]["speed_mps"]), dtype=torch.float32),

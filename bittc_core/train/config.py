@@ -26,6 +26,9 @@ class TrainConfig:
     # (jittered; ``train.targets.sample_eta_at_pixels``), the rest uniform
     pixel_threshold_share: float = 0.0
     actor_weight: float = 1.0  # binary TTC loss weight of moving-actor pixels (instance > 0), static 1
+    # binary TTC loss weight of in-path vehicle pixels (``data.dataset.INPATH_HALF_WIDTH_M``),
+    # instead of actor_weight there: what a braking controller reads
+    inpath_weight: float = 1.0
     lovasz_weight: float = 0.0  # binary stage: + this x Lovasz two-class IoU surrogate per map
     # binary stage: + this x BCE towards a frozen teacher's flip-averaged maps (``train.distill``;
     # pixels weighted as in the ground-truth BCE); > 0 needs a teacher network of the same config
@@ -62,6 +65,8 @@ class TrainConfig:
             raise ValueError(f"freeze_binary applies to the continuous stage, not {self.stage!r}")
         if self.actor_weight <= 0:
             raise ValueError(f"actor_weight={self.actor_weight}: must be > 0")
+        if self.inpath_weight <= 0:
+            raise ValueError(f"inpath_weight={self.inpath_weight}: must be > 0")
         if self.lovasz_weight < 0:
             raise ValueError(f"lovasz_weight={self.lovasz_weight}: must be >= 0")
         if self.distill_weight < 0:

@@ -193,8 +193,11 @@ class Trainer:
             thr = thr.to(self.device)
             logits = net.classify_eta(ctx, feats[:b], thr)
             weight = None
-            if c.actor_weight != 1.0:
-                weight = torch.where(batch["instance"] > 0, c.actor_weight, 1.0)[:, None]
+            if c.actor_weight != 1.0 or c.inpath_weight != 1.0:
+                weight = torch.where(batch["instance"] > 0, c.actor_weight, 1.0)
+                if "inpath" in batch:  # the built-in synthetic data has no road, no path
+                    weight = torch.where(batch["inpath"], c.inpath_weight, weight)
+                weight = weight[:, None]
             labels = eta_labels(eta, thr)
             out["ttc"] = masked_bce(logits, labels, mask[:, None], weight)
             if c.lovasz_weight > 0:
