@@ -218,19 +218,15 @@ class GeofenceController(Controller):
         below = np.append(tau_ground[1:], tau_ground[-1])  # the ground one row lower
         for i, tau in enumerate(self._thr):
             rows = (tau_ground > c.ground_margin * tau) & (below > c.ground_margin * tau)
-            if speed_mps * math.cos(math.radians(cal.pitch_deg)) > 1e-6:
-                u0, u1 = corridor_columns(cal, half_w, static_depth_m(cal, speed_mps, tau))
-            else:
-                u0, u1 = 0, cal.width_px - 1
-            region = np.zeros_like(counted)
-            if u1 >= u0:
-                region[rows, u0 : u1 + 1] = True
             if not rows.any():
                 continue
+            depth = static_depth_m(cal, speed_mps, tau)
+            u0, u1 = corridor_columns(cal, half_w, depth) if depth > 1e-6 else (0, cal.width_px - 1)
+            region = np.zeros_like(counted)
+            region[rows, u0 : u1 + 1] = True
             lowest = int(np.flatnonzero(rows).max())
             area, standing = standing_regions((maps[i] > c.prob_inside) & region, lowest, c.contact_px)
-            depth = static_depth_m(cal, speed_mps, tau) if speed_mps > 0 else 0.0
-            need = max(c.min_region_px, cal.fx_px * cal.fy_px * c.min_face_m2 / depth**2 if depth > 0 else 0.0)
+            need = max(c.min_region_px, cal.fx_px * cal.fy_px * c.min_face_m2 / depth**2 if depth > 1e-6 else 0.0)
             if area >= need:
                 sizes[i] = area
                 counted |= standing
@@ -275,20 +271,22 @@ class GeofenceController(Controller):
         return BrakeCommand(cmd.decel_mps2, cmd.warning, telemetry=tel, view=view)
 
 
+def _config(thresholds_s, frame_stride: int) -> GeofenceConfig:
+    thr = tuple(thresholds_s) if thresholds_s is not None else default_thresholds(4)
+    return GeofenceConfig(thresholds_s=thr, frame_stride=frame_stride)
+
+
 def make_geofence(thresholds_s=None, weights: str | None = None, frame_stride: int = 1, device: str = "cpu",
                   name: str = "geofence") -> GeofenceController:
     """The shipped network (or ``weights``) behind the geofence controller."""
     from bittc_core.estimator import make_estimator
 
-    cfg = GeofenceConfig(thresholds_s=tuple(thresholds_s) if thresholds_s is not None else default_thresholds(4),
-                         frame_stride=frame_stride)
-    return GeofenceController(make_estimator("bittc", weights=weights, device=device), cfg, name=name)
+    return GeofenceController(make_estimator("bittc", weights=weights, device=device), _config(thresholds_s, frame_stride),
+                              name=name)
 
 
 def make_flow(thresholds_s=None, frame_stride: int = 1, name: str = "flow") -> GeofenceController:
     """The DIS + affine-expansion baseline behind the same controller logic."""
     from bittc_core.estimator import make_estimator
 
-    cfg = GeofenceConfig(thresholds_s=tuple(thresholds_s) if thresholds_s is not None else default_thresholds(4),
-                         frame_stride=frame_stride)
-    return GeofenceController(make_estimator("flow"), cfg, name=name)
+    return GeofenceController(make_estimator("flow"), _config(thresholds_s, frame_stride), name=name)
