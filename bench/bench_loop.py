@@ -47,7 +47,8 @@ def main() -> None:
     for k in args.ks:
         ctrl = controllers.make(args.controller, thresholds_s=default_thresholds(k))
         sim = ScenarioSim(case, cam, args.seed, render=True)
-        loop = ClosedLoop(sim, parse_latency("measured"), num_alphas=k, pairs=True, lag_meter=FenceLagMeter())
+        loop = ClosedLoop(sim, parse_latency("measured"), num_alphas=k, pairs=True, frame_stride=ctrl.frame_stride,
+                          lag_meter=FenceLagMeter())
         t0 = time.perf_counter()
         est_s = 0.0
         ctrl.reset(loop.calibration)

@@ -53,6 +53,12 @@ obstacle, s / (2 (tau_hat - d / s)), picks partial or full braking at the partia
 stage. Braking latches; it is released after ``release_frames`` jobs with no fence
 firing. Below ``min_speed_mps`` the controller neither warns nor brakes.
 
+**Frame stride** (``frame_stride``, default 2): the pair is the latest frame and the one
+captured two frames before it, so a target's outline moves twice as far per pair at no
+extra compute (the estimator caches every frame's features). Measured with
+``docs/controller_levers.py``: on 24 cases 14 of 19 threats avoided against 10 of 19 at
+stride 1, no false alarm either way.
+
 **Thresholds**: explicit (any order, each within the estimator's trained range), or
 ``default_thresholds(K)``: K values spaced uniformly in log tau over
 ``DEFAULT_TAU_RANGE_S`` (0.8-2.8 s; K = 1: their geometric mean, 1.5 s). With a frame
@@ -119,7 +125,7 @@ class GeofenceConfig:
     persistence_frames: int = 2  # [jobs] consecutive jobs before a fence fires
     release_frames: int = 3  # [jobs] without any fence firing before braking is released
     min_speed_mps: float = 1.0  # [m/s] below this: no warning, no braking
-    frame_stride: int = 1  # [frames] the pair is (k - stride, k)
+    frame_stride: int = 2  # [frames] the pair is (k - stride, k): twice the motion per pair
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "thresholds_s", check_thresholds(self.thresholds_s))
@@ -271,12 +277,12 @@ class GeofenceController(Controller):
         return BrakeCommand(cmd.decel_mps2, cmd.warning, telemetry=tel, view=view)
 
 
-def _config(thresholds_s, frame_stride: int) -> GeofenceConfig:
+def _config(thresholds_s, frame_stride: int | None) -> GeofenceConfig:
     thr = tuple(thresholds_s) if thresholds_s is not None else default_thresholds(4)
-    return GeofenceConfig(thresholds_s=thr, frame_stride=frame_stride)
+    return GeofenceConfig(thresholds_s=thr, **({} if frame_stride is None else {"frame_stride": frame_stride}))
 
 
-def make_geofence(thresholds_s=None, weights: str | None = None, frame_stride: int = 1, device: str = "cpu",
+def make_geofence(thresholds_s=None, weights: str | None = None, frame_stride: int | None = None, device: str = "cpu",
                   name: str = "geofence") -> GeofenceController:
     """The shipped network (or ``weights``) behind the geofence controller."""
     from bittc_core.estimator import make_estimator
@@ -285,7 +291,7 @@ def make_geofence(thresholds_s=None, weights: str | None = None, frame_stride: i
                               name=name)
 
 
-def make_flow(thresholds_s=None, frame_stride: int = 1, name: str = "flow") -> GeofenceController:
+def make_flow(thresholds_s=None, frame_stride: int | None = None, name: str = "flow") -> GeofenceController:
     """The DIS + affine-expansion baseline behind the same controller logic."""
     from bittc_core.estimator import make_estimator
 

@@ -24,12 +24,12 @@ from sim.latency import parse_latency  # noqa: E402
 from sim.runner import run_case  # noqa: E402
 
 SETTINGS = {  # name -> GeofenceConfig overrides
-    "as shipped (stride 1, persistence 2, nested)": {},
+    "as shipped (stride 2, persistence 2, nested)": {},
+    "stride 1": {"frame_stride": 1},
+    "stride 3": {"frame_stride": 3},
     "persistence 1": {"persistence_frames": 1},
     "persistence 3": {"persistence_frames": 3},
     "not nested": {"nested": False},
-    "stride 2": {"frame_stride": 2},
-    "stride 3": {"frame_stride": 3},
 }
 DEFAULT_CASES = ["CCRs", "CCRm", "CCRb", "cut-in", "benign-oncoming-truck", "benign-stationary-adjacent",
                  "benign-free-road", "benign-parked-truck", "benign-follow-same-speed"]

@@ -2,7 +2,8 @@
 
 Every case is rendered with exact ground truth and no braking (the ego keeps its speed
 until the run ends as ``ScenarioSim.done`` says, a collision included). The estimator
-runs on every frame pair, as the closed loop would with no latency, behind the geofence
+runs on every frame pair (consecutive frames unless told a stride), as the closed loop
+would with no latency, behind the geofence
 controller's evidence rules (``controllers.geofence``), whose decisions are recorded but
 never applied. Per case and threshold tau_i (camera-plane TTC [s] from the latest frame):
 
@@ -10,7 +11,10 @@ never applied. Per case and threshold tau_i (camera-plane TTC [s] from the lates
   frame where fence i covers at least half of its pixels (``sim.fence_lag``); None when it
   never does;
 * the share of the critical actor inside each fence against its exact TTC (binned in
-  ``TAU_BINS_S``; the curve of ``plot_inside_share``);
+  ``TAU_BINS_S``; the curve of ``plot_inside_share``) and, from it, ``curve_lag_s``:
+  tau_i minus the TTC at which the mean share over the threat cases reaches one half
+  (linear between bins). The first-cover lag rewards a fence that flickers on for a
+  frame early; the curve's does not;
 * on benign cases, the in-path evidence the controller would have counted ("stray"): the
   frames with an in-path region per fence and the longest run of consecutive frames.
 """
@@ -70,12 +74,16 @@ class CaseResult:
     would_warn: bool  # the controller's decisions (not applied) included a warning
 
 
-def evaluate_case(case: ScenarioCase, estimator, thresholds_s, camera: CameraConfig, seed: int = 0) -> CaseResult:
-    probe = OpenLoopProbe(GeofenceController(estimator, GeofenceConfig(thresholds_s=tuple(thresholds_s))))
+def evaluate_case(case: ScenarioCase, estimator, thresholds_s, camera: CameraConfig, seed: int = 0,
+                  frame_stride: int = 1) -> CaseResult:
+    """``frame_stride`` 1: consecutive frames, the estimator's own frame interval."""
+    cfg = GeofenceConfig(thresholds_s=tuple(thresholds_s), frame_stride=frame_stride)
+    probe = OpenLoopProbe(GeofenceController(estimator, cfg))
     sim = ScenarioSim(case, camera, seed, render=True)
     lag = FenceLagMeter()
     try:
-        loop = ClosedLoop(sim, parse_latency("fixed:0"), num_alphas=probe.num_alphas, pairs=True, lag_meter=lag)
+        loop = ClosedLoop(sim, parse_latency("fixed:0"), num_alphas=probe.num_alphas, pairs=True,
+                          frame_stride=frame_stride, lag_meter=lag)  # fmt: skip
         loop.drive(probe)
     finally:
         sim.close()
@@ -114,13 +122,29 @@ def inside_share_curve(results: list[CaseResult], keys: list[str]) -> dict:
     return out
 
 
+def half_share_ttc(rows) -> float | None:
+    """[(bin centre [s], mean share, frames)] ascending -> the largest TTC [s] at which the
+    share reaches 0.5, linear between bins; None if it never does."""
+    for j in range(len(rows) - 1, -1, -1):
+        c, share, _ = rows[j]
+        if share >= 0.5:
+            if j == len(rows) - 1:
+                return c
+            c1, s1, _ = rows[j + 1]
+            return c + (share - 0.5) / (share - s1) * (c1 - c)
+    return None
+
+
 def summarize(results: list[CaseResult], thresholds_s) -> dict:
     keys = [f"{t:g}" for t in sorted(thresholds_s)]
     threats = [r for r in results if r.threat]
     fast = [r for r in threats if FAST_KPH[0] <= r.ego_speed_kph <= FAST_KPH[1]]
     benign = [r for r in results if not r.threat]
+    curve = inside_share_curve(results, keys)
+    half = {k: half_share_ttc(curve[k]) for k in keys}
     return {
         "thresholds_s": [float(k) for k in keys],
+        "curve_lag_s": {k: (round(float(k) - half[k], 4) if half[k] is not None else None) for k in keys},
         "fence_lag_s": {k: _median(r.fence_lag_s.get(k) for r in threats) for k in keys},
         "fence_lag_s_fast": {k: _median(r.fence_lag_s.get(k) for r in fast) for k in keys},
         "fence_never_covered": {k: sum(r.fence_lag_s.get(k) is None for r in threats) for k in keys},
@@ -129,7 +153,7 @@ def summarize(results: list[CaseResult], thresholds_s) -> dict:
         "benign_cases": len(benign),
         "benign_stray_over_2_frames": {k: sum(r.stray_max_run[k] > 2 for r in benign) for k in keys},
         "benign_would_warn": sum(r.would_warn for r in benign),
-        "inside_share_by_tau": inside_share_curve(results, keys),
+        "inside_share_by_tau": curve,
         "per_case": {
             r.name: {"threat": r.threat, "ego_speed_kph": r.ego_speed_kph, "fence_lag_s": r.fence_lag_s,
                      **({"stray_frames": r.stray_frames, "stray_max_run_frames": r.stray_max_run,
@@ -155,6 +179,7 @@ def format_table(summary: dict) -> str:
     lines.append(row(f"median ({summary['threat_cases']} threats)", summary["fence_lag_s"]))
     lines.append(row(f"median, 60-80 km/h ({summary['fast_cases']})", summary["fence_lag_s_fast"]))
     lines.append(f"{'never covered':<28}" + "".join(f"{summary['fence_never_covered'][k]:>11}" for k in keys))
+    lines.append(row("lag of the mean-share curve", summary["curve_lag_s"]))
     lines.append(f"benign cases with in-path evidence over 2 frames: "
                  + ", ".join(f"{k} s: {v}/{summary['benign_cases']}" for k, v in summary["benign_stray_over_2_frames"].items())
                  + f"; the controller would warn in {summary['benign_would_warn']}/{summary['benign_cases']}")

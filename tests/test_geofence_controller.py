@@ -60,7 +60,7 @@ def add_box(tau, dist_m, lateral_m, tau_s, width_m=1.8, height_m=1.5):
 
 def run(tau_map, speed=SPEED, jobs=3, thresholds=THR):
     est = MapEstimator()
-    ctrl = GeofenceController(est, GeofenceConfig(thresholds_s=thresholds))
+    ctrl = GeofenceController(est, GeofenceConfig(thresholds_s=thresholds, frame_stride=1))  # maps per pair
     ctrl.reset(CAL)
     img = np.zeros((CAM.height_px, CAM.width_px, 3), np.uint8)
     est.tau = tau_map
@@ -129,7 +129,7 @@ def test_bad_thresholds_are_refused(bad):
 
 
 def test_a_frame_interval_outside_the_trained_range_is_refused():
-    ctrl = GeofenceController(MapEstimator(), GeofenceConfig(thresholds_s=(0.3,)))
+    ctrl = GeofenceController(MapEstimator(), GeofenceConfig(thresholds_s=(0.3,), frame_stride=1))
     fast = Calibration.from_camera(CameraConfig(fps_hz=5.0), EGO_SIZE_M)  # 0.3 s at 0.2 s -> 0.15 s at 0.1 s
     with pytest.raises(ConfigError, match="frame interval 0.2 s"):
         ctrl.reset(fast)

@@ -40,6 +40,8 @@ def add_parser(sub) -> argparse.ArgumentParser:
                    help="with --scenarios: the fences' thresholds [s] (default 0.9 1.6 2.4)")
     p.add_argument("--plot", default=None, help="with --scenarios: also write this PNG of the inside-share curve")
     p.add_argument("--seed", type=int, default=0, help="with --scenarios: scenery seed (default 0)")
+    p.add_argument("--frame-stride", type=int, default=1, metavar="N",
+                   help="with --scenarios: pair each frame with the one N frames before (default 1)")
     p.add_argument("--method", required=True, help="bittc, flow, oracle, or oracle-auc (exact geofences; "
                    "continuous output from their AUC at the shipped network's levels: the floor of its AUC)")
     p.add_argument("--weights", default=None, help="checkpoint for bittc (default: shipped weights)")
@@ -78,6 +80,8 @@ def _check(args) -> Path:
             args.tau = check_thresholds(args.tau)
         except CliError as e:
             raise CliError(f"--tau: {e}") from None
+        if not 1 <= args.frame_stride <= 10:
+            raise CliError(f"--frame-stride {args.frame_stride}: must be in [1, 10]")
         if args.plot is not None and not args.plot.endswith(".png"):
             raise CliError(f"--plot {args.plot!r}: expected a .png file")
     default = f"eval_{args.method}_scenarios_{Path(args.scenarios).stem}.json" if args.scenarios else \
@@ -160,9 +164,10 @@ def run_scenarios(args, out: Path) -> int:
     estimator = make_estimator(args.method, weights=args.weights, device=args.device, tta=args.tta)
     from tqdm import tqdm
 
-    results = [scenario_eval.evaluate_case(c, estimator, args.tau, CameraConfig(), args.seed)
+    results = [scenario_eval.evaluate_case(c, estimator, args.tau, CameraConfig(), args.seed, args.frame_stride)
                for c in tqdm(cases, desc="cases", unit="case", leave=False)]
     summary = {"method": args.method, "weights": args.weights, "scenarios": args.scenarios, "seed": args.seed,
+               "frame_stride": args.frame_stride,
                **scenario_eval.summarize(results, args.tau)}  # fmt: skip
     print(scenario_eval.format_table(summary))
     if args.plot:

@@ -22,8 +22,8 @@ def add_controller_flags(p: argparse.ArgumentParser, default: str | None = None)
                    help="measured, fixed:MS or profile:NAME (`bittc profiles`); default measured for "
                         "camera controllers, fixed:0 otherwise")
     p.add_argument("--weights", default=None, help="geofence: network weights (default: the shipped ones)")
-    p.add_argument("--frame-stride", type=int, default=1, metavar="N",
-                   help="geofence/flow: pair each frame with the one N frames before (default 1)")
+    p.add_argument("--frame-stride", type=int, default=None, metavar="N",
+                   help="geofence/flow: pair each frame with the one N frames before (default 2)")
 
 
 def controller_from_args(args, camera):
@@ -47,7 +47,7 @@ def controller_from_args(args, camera):
     except ConfigError as e:
         flag = "--num-alphas" if args.num_alphas is not None else "--ttc-thresholds"
         raise CliError(f"{flag}: {e}") from None
-    if args.frame_stride != 1:
+    if args.frame_stride is not None:
         if not 1 <= args.frame_stride <= 10:
             raise CliError(f"--frame-stride {args.frame_stride}: must be in [1, 10]")
         settings["frame_stride"] = args.frame_stride

@@ -1,7 +1,7 @@
 """``bittc``: the Binary-TTC network behind the estimator interface, with streaming.
 
 Streaming cache: the features of each frame are computed once. The estimator keeps
-the last two frames it saw (the tensor on the model's device and its features) and the
+the last ``CACHED_FRAMES`` frames it saw (the tensor on the model's device and its features) and the
 reference context of the last latest frame. A frame is recognised by exact pixel
 equality (one ``torch.equal``, ~0.05 ms at 96x288), not by object identity, so it works
 whether the caller passes the same object, a copy, or a fresh numpy array each call:
@@ -32,7 +32,7 @@ from bittc_core.estimator.base import Estimator, EstimatorInputError
 from bittc_core.model import BinaryTTCNet, ReferenceContext
 from bittc_core.model.flip import flip_views, merge_flip_views
 
-CACHED_FRAMES = 2
+CACHED_FRAMES = 4  # a stream of pairs (k - n, k) for every k reuses every frame's features for n <= 3
 TTA_MODES = ("none", "flip")
 
 
