@@ -67,6 +67,16 @@ def test_unsorted_thresholds_only_matter_for_quantized(est):
         est.quantized(frame(0), frame(1), [1.0, 1.0])
 
 
+def test_a_stride_two_stream_extracts_every_frame_once(est):
+    """Pairs (f0, f2), (f1, f3), ...: the closed loop's default frame stride."""
+    est.reset()
+    f = [frame(i) for i in range(6)]
+    n0 = est.feature_computations
+    for i in range(4):
+        est.geofence(f[i], f[i + 2], [1.0])
+    assert est.feature_computations - n0 == 6
+
+
 def test_streaming_reuses_features_and_matches_uncached(est):
     est.reset()
     f = [frame(i) for i in range(4)]
