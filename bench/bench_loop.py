@@ -50,23 +50,16 @@ def main() -> None:
         loop = ClosedLoop(sim, parse_latency("measured"), num_alphas=k, pairs=True, frame_stride=ctrl.frame_stride,
                           lag_meter=FenceLagMeter())
         t0 = time.perf_counter()
-        est_s = 0.0
-        ctrl.reset(loop.calibration)
-        job = loop.reset()
-        while job is not None:
-            t1 = time.perf_counter()
-            cmd = ctrl.act(loop.observation(job), None)
-            dt = time.perf_counter() - t1
-            loop.timing["controller_s"] += dt
-            est_s += cmd.telemetry["estimator_ms"] * 1e-3
-            job = loop.submit(cmd, dt)
+        loop.drive(ctrl)
         wall = time.perf_counter() - t0
         sim.close()
+        jobs = loop.processed
+        est_s = sum(r.decided.telemetry["estimator_ms"] for r in jobs) * 1e-3
         n = len(loop.records)
         tm = loop.timing
         gt = tm.get("ground_truth_s", 0.0)
         per = [tm["render_s"], tm["traffic_s"], tm["truth_s"], gt, est_s, tm["controller_s"] - est_s, wall]
-        print(("{:>9}" * 4).format(k, n, len(loop.processed), sum(r.status == "skipped" for r in loop.records))
+        print(("{:>9}" * 4).format(k, n, len(jobs), sum(r.status == "skipped" for r in loop.records))
               + "{:>9.2f}{:>9.2f}".format(sim.t_s / wall, sim.t_s / (wall - gt))
               + ("{:>9.1f}" * len(per)).format(*(1e3 * x / n for x in per)))
 

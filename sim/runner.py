@@ -109,8 +109,9 @@ def summarize(case: ScenarioCase, controller: Controller, seed: int, loop: Close
     sim = loop.sim
     col = sim.collision
     first_warn, first_brake = loop.first_warning, loop.first_brake
-    lat_ms = np.array([r.latency_s for r in loop.processed], dtype=np.float64) * 1e3
-    wait_ms = np.array([r.wait_s for r in loop.processed], dtype=np.float64) * 1e3
+    jobs = loop.processed
+    lat_ms = np.array([r.latency_s for r in jobs], dtype=np.float64) * 1e3
+    wait_ms = np.array([r.wait_s for r in jobs], dtype=np.float64) * 1e3
     thresholds = getattr(getattr(controller, "cfg", None), "thresholds_s", None)
     summary = {
         "scenario": case.name,
@@ -138,7 +139,7 @@ def summarize(case: ScenarioCase, controller: Controller, seed: int, loop: Close
         "latency_ms_p95": _r(float(np.percentile(lat_ms, 95)), 3) if lat_ms.size else None,
         "wait_ms_mean": _r(float(wait_ms.mean()), 3) if wait_ms.size else None,
         "actuator_delay_ms": _r(sim.actuator.delay_s * 1e3, 3),
-        "frames_processed": len(loop.processed),
+        "frames_processed": len(jobs),
         "frames_skipped": sum(r.status == "skipped" for r in loop.records),
     }
     if lag is not None:
