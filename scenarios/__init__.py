@@ -33,10 +33,11 @@ SUITES: dict[str, str] = {
     "ncap": "every Euro NCAP car-to-car case: CCRs, CCRs-offset, CCRm, CCRb",
     "benign": "every benign scenario (no warning or brake expected)",
     "all": "every bundled case",
-    "demo": "five cases for a quick look: CCRs-30, CCRs-50, CCRm-50, cut-in, benign-oncoming",
+    "demo": "five cases that show the trade-off: CCRs-50, CCRm-50, CCRb-12m-6mps2, benign-oncoming, "
+            "benign-parked-truck",
 }
 NCAP_FAMILIES = ("CCRs", "CCRs-offset", "CCRm", "CCRb")
-DEMO_CASES = ("CCRs-30", "CCRs-50", "CCRm-50", "cut-in", "benign-oncoming")
+DEMO_CASES = ("CCRs-50", "CCRm-50", "CCRb-12m-6mps2", "benign-oncoming", "benign-parked-truck")
 
 
 def resolve_suite(name: str) -> list[ScenarioCase]:

@@ -1,0 +1,135 @@
+"""``results.csv`` (one row per run) and the per-configuration summary
+(``summary.csv``, ``summary.md``: one row per controller x K x latency mode).
+
+Definitions (threat runs are those of scenarios with ``threat: true``):
+    threats avoided      threat runs without a collision / threat runs
+    mean impact speed    over threat runs, an avoided run counting 0 km/h [km/h]
+    mean speed reduction over threat runs [km/h]
+    FCW pass             a threat run whose first warning came at an exact bumper TTC
+                         >= 2.1 s (the NHTSA FCW criterion); the rate is over threat runs
+    TTC at first warning mean and minimum over the threat runs that warned [s]
+    false alarms         benign runs with any warning or brake / benign runs
+    latency              the mean of the runs' mean latencies and of their p95 [ms]
+    frames skipped       the share of captured frames the estimator skipped
+    Euro NCAP bands, gate see ``sim.sweep.ncap``
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+
+from bittc_core.atomic import write_text_atomic
+from sim.runner import SUMMARY_KEYS
+from sim.suite import _csv_value
+from sim.sweep import ncap
+
+FCW_TTC_S = 2.1  # [s] NHTSA's FCW confirmation test: a warning at TTC >= 2.1 s for a stopped lead
+RUN_KEYS = ("run_id", "status", "error", "config", "ego_speed_kph", "ncap_band", "folder")
+RESULT_COLUMNS = RUN_KEYS + tuple(k for k in SUMMARY_KEYS if k not in RUN_KEYS) + ("fence_lag_s",)
+SUMMARY_COLUMNS = (
+    "controller", "num_alphas", "latency_mode", "runs", "failed", "threats_avoided", "threats", "collisions",
+    "mean_impact_speed_kph", "mean_speed_reduction_kph", "fcw_pass_rate", "ttc_first_warning_mean_s",
+    "ttc_first_warning_min_s", "false_alarms", "benign_runs", "latency_ms_mean", "latency_ms_p95",
+    "frames_skipped_share", "ncap_green", "ncap_yellow", "ncap_orange", "ncap_brown", "ncap_red", "ncap_ccrs_gate",
+)  # fmt: skip
+
+
+def result_row(spec, case, summary: dict | None, error: str | None) -> dict:
+    row = {k: None for k in RESULT_COLUMNS}
+    row.update(run_id=spec.run_id, config=spec.config_id, controller=spec.controller, num_alphas=spec.num_alphas,
+               latency_mode=spec.latency, seed=spec.seed, scenario=spec.case, family=case.family, threat=case.threat,
+               ego_speed_kph=case.ego.speed_kph)  # fmt: skip
+    if summary is None:
+        row.update(status="failed", error=(error or "").strip().splitlines()[-1] if error else "failed")
+        return row
+    row.update({k: summary.get(k) for k in RESULT_COLUMNS if k in summary})
+    row.update(status="ok", error=None, folder=f"runs/{spec.run_id}", ncap_band=ncap.band_of_run(row))
+    return row
+
+
+def write_results(path, rows: list[dict]) -> None:
+    write_text_atomic(path, _csv(RESULT_COLUMNS, rows))
+
+
+def _csv(columns, rows) -> str:
+    buf = io.StringIO()
+    w = csv.DictWriter(buf, fieldnames=list(columns), lineterminator="\n")
+    w.writeheader()
+    for r in rows:
+        w.writerow({k: _csv_value(r.get(k)) for k in columns})
+    return buf.getvalue()
+
+
+def _mean(xs):
+    xs = [x for x in xs if x is not None and math.isfinite(x)]
+    return round(sum(xs) / len(xs), 3) if xs else None
+
+
+def summarize(rows: list[dict]) -> list[dict]:
+    """One row per configuration, in the order the configurations first appear."""
+    groups: dict[tuple, list[dict]] = {}
+    for r in rows:
+        groups.setdefault((r["controller"], r["num_alphas"], r["latency_mode"]), []).append(r)
+    out = []
+    for (controller, k, latency), rs in groups.items():
+        ok = [r for r in rs if r["status"] == "ok"]
+        threats = [r for r in ok if r["threat"]]
+        benign = [r for r in ok if not r["threat"]]
+        warned = [r["ttc_at_first_warning_s"] for r in threats if r["ttc_at_first_warning_s"] is not None]
+        frames = sum((r["frames_processed"] or 0) + (r["frames_skipped"] or 0) for r in ok)
+        bands = [r["ncap_band"] for r in threats if r["ncap_band"]]
+        s = {
+            "controller": controller, "num_alphas": k, "latency_mode": latency, "runs": len(rs),
+            "failed": len(rs) - len(ok), "threats_avoided": sum(not r["collision"] for r in threats),
+            "threats": len(threats), "collisions": sum(bool(r["collision"]) for r in threats),
+            "mean_impact_speed_kph": _mean([r["impact_speed_kph"] or 0.0 for r in threats]),
+            "mean_speed_reduction_kph": _mean([r["speed_reduction_kph"] for r in threats]),
+            "fcw_pass_rate": round(sum(t >= FCW_TTC_S for t in warned) / len(threats), 3) if threats else None,
+            "ttc_first_warning_mean_s": _mean(warned), "ttc_first_warning_min_s": min(warned) if warned else None,
+            "false_alarms": sum(bool(r["false_alarm"]) for r in benign), "benign_runs": len(benign),
+            "latency_ms_mean": _mean([r["latency_ms_mean"] for r in ok]),
+            "latency_ms_p95": _mean([r["latency_ms_p95"] for r in ok]),
+            "frames_skipped_share": round(sum(r["frames_skipped"] or 0 for r in ok) / frames, 4) if frames else None,
+            **{f"ncap_{b}": bands.count(b) for b in ncap.BANDS},
+            "ncap_ccrs_gate": ncap.ccrs_gate(threats),
+        }  # fmt: skip
+        out.append(s)
+    return out
+
+
+def write_summary(out_dir, summary: list[dict]) -> str:
+    """summary.csv and summary.md; -> the Markdown table."""
+    write_text_atomic(out_dir / "summary.csv", _csv(SUMMARY_COLUMNS, summary))
+    md = markdown_table(summary)
+    write_text_atomic(out_dir / "summary.md", md + "\n")
+    return md
+
+
+def _fmt(v, nd=2) -> str:
+    if v is None:
+        return "–"
+    if isinstance(v, float):
+        return f"{v:.{nd}f}"
+    return str(v)
+
+
+def markdown_table(summary: list[dict]) -> str:
+    head = ("controller", "K", "latency", "avoided", "mean impact [km/h]", "FCW ≥ 2.1 s", "TTC at warning mean / min [s]",
+            "false alarms", "latency mean / p95 [ms]", "skipped", "Euro NCAP G/Y/O/B/R", "CCRs ≤ 20 gate")  # fmt: skip
+    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    for s in summary:
+        gate = {True: "pass", False: "fail", None: "–"}[s["ncap_ccrs_gate"]]
+        cells = (s["controller"], s["num_alphas"] or "–", s["latency_mode"], f"{s['threats_avoided']}/{s['threats']}",
+                 _fmt(s["mean_impact_speed_kph"], 1),
+                 "–" if s["fcw_pass_rate"] is None else f"{s['fcw_pass_rate']:.0%}",
+                 f"{_fmt(s['ttc_first_warning_mean_s'])} / {_fmt(s['ttc_first_warning_min_s'])}",
+                 f"{s['false_alarms']}/{s['benign_runs']}",
+                 f"{_fmt(s['latency_ms_mean'], 1)} / {_fmt(s['latency_ms_p95'], 1)}",
+                 "–" if s["frames_skipped_share"] is None else f"{s['frames_skipped_share']:.0%}",
+                 "/".join(str(s[f"ncap_{b}"]) for b in ncap.BANDS), gate)  # fmt: skip
+        if s["failed"]:
+            cells = cells[:3] + (f"{cells[3]} ({s['failed']} failed)",) + cells[4:]
+        lines.append("| " + " | ".join(str(c) for c in cells) + " |")
+    return "\n".join(lines)
