@@ -26,6 +26,11 @@ PLOTS = ("latency_vs_k.png", "warning_ttc_vs_k.png", "rates_vs_k.png", "impact_v
 DPI = 110
 
 
+def _legend(ax, **kw) -> None:
+    """A legend only where something is labelled (an empty one warns)."""
+    if ax.get_legend_handles_labels()[0]:
+        ax.legend(**kw)
+
 def _plt():
     import matplotlib
 
@@ -95,7 +100,7 @@ def plot_all(out_dir: Path, rows: list[dict], summary: list[dict], frame_dt_s: f
     ax.axhline(frame_dt_s * 1e3, color="k", lw=0.8)
     ax.text(1, frame_dt_s * 1e3, " frame interval: above it frames are skipped", va="bottom", fontsize=8)
     ax.set_ylabel("latency per frame [ms] (dotted: p95)")
-    ax.legend(fontsize=7)
+    _legend(ax, fontsize=7)
     _save(fig, d / PLOTS[0])
 
     fig, ax = plt.subplots(figsize=(6.4, 4))
@@ -103,7 +108,7 @@ def plot_all(out_dir: Path, rows: list[dict], summary: list[dict], frame_dt_s: f
     ax.axhline(FCW_TTC_S, color="k", lw=0.8)
     ax.text(1, FCW_TTC_S, " NHTSA FCW: 2.1 s", va="bottom", fontsize=8)
     ax.set_ylabel("exact TTC at first warning, mean [s]")
-    ax.legend(fontsize=7)
+    _legend(ax, fontsize=7)
     _save(fig, d / PLOTS[1])
 
     fig, (a1, a2) = plt.subplots(1, 2, figsize=(10, 4))
@@ -113,7 +118,7 @@ def plot_all(out_dir: Path, rows: list[dict], summary: list[dict], frame_dt_s: f
     _k_plot(a2, summary, lambda s: s["false_alarms"] / s["benign_runs"] if s["benign_runs"] else None)
     a2.set_ylabel("benign runs with a false alarm (share)")
     a2.set_ylim(-0.02, 1.02)
-    a1.legend(fontsize=7)
+    _legend(a1, fontsize=7)
     _save(fig, d / PLOTS[2])
 
     _impact_plot(plt, d / PLOTS[3], rows)
@@ -142,7 +147,7 @@ def _impact_plot(plt, path: Path, rows: list[dict]) -> None:
     ax.set_ylabel("relative impact speed [km/h] (0: avoided)")
     ax.set_ylim(-1, vmax)
     ax.set_title("Euro NCAP view: bands green / yellow / orange / brown / red", fontsize=9)
-    ax.legend(fontsize=6, ncol=2)
+    _legend(ax, fontsize=6, ncol=2)
     _save(fig, path)
 
 
@@ -172,7 +177,7 @@ def _timeline_plot(plt, path: Path, out_dir: Path, rows: list[dict], case: str |
     axes[2].set_ylabel("brake [m/s²] (+0.3: warning)")
     axes[2].set_xlabel("time [s]")
     axes[0].set_title(f"{case}: the stages of each configuration (seed 0)", fontsize=9)
-    axes[0].legend(fontsize=6, ncol=2)
+    _legend(axes[0], fontsize=6, ncol=2)
     for a in axes:
         a.grid(alpha=0.3)
     _save(fig, path)
