@@ -81,31 +81,49 @@ def extra_threshold_ratios(binary_ms: dict) -> tuple[dict, float]:
     return ratios, slope / t1
 
 
+def _network_estimator(s: BenchSettings, weights: str | None) -> BittcEstimator:
+    if weights:
+        return BittcEstimator.from_checkpoint(weights, device="cpu")
+    torch.manual_seed(s.seed)  # untrained weights time the same as trained ones
+    return BittcEstimator(BinaryTTCNet(get_config(s.config)), device=torch.device("cpu"))
+
+
+def _taus(cfg, k: int) -> np.ndarray:
+    return np.geomspace(cfg.tau_min_s, min(cfg.tau_max_s, 5.0), k)
+
+
+def backend_calls(est, s: BenchSettings, prefix: str = "") -> dict:
+    """The timed calls of one backend: K thresholds for each K, and the continuous mode;
+    each its own cache (``fork``), the model shared."""
+    cfg_tau = (est.tau_range_s[0], est.tau_range_s[1])
+
+    def geofence(k: int):
+        e = est.fork()
+        thr = np.geomspace(cfg_tau[0], min(cfg_tau[1], 5.0), k)
+        return lambda a, b: e.geofence(a, b, thr)
+
+    calls = {f"{prefix}{k}": geofence(k) for k in s.thresholds}
+    calls[f"{prefix}continuous"] = est.fork().continuous
+    return calls
+
+
 def run_benchmark(s: BenchSettings = BenchSettings(), weights: str | None = None) -> dict:
     torch.set_num_threads(s.threads)
-    if weights:
-        est = BittcEstimator.from_checkpoint(weights, device="cpu")
-    else:  # untrained weights time the same as trained ones
-        torch.manual_seed(s.seed)
-        est = BittcEstimator(BinaryTTCNet(get_config(s.config)), device=torch.device("cpu"))
+    est = _network_estimator(s, weights)
     cfg = est.net.config
     frames = _frames(s, s.calls + s.warmup + 1)
-    taus = lambda k: np.geomspace(cfg.tau_min_s, min(cfg.tau_max_s, 5.0), k)  # noqa: E731
     print(f"config {s.config}: {count_parameters(est.net) / 1e6:.3f} M params, "
           f"{s.height_px}x{s.width_px} px, {torch.get_num_threads()} threads, streaming")
 
-    def estimator(tta: str = "none") -> BittcEstimator:
-        return BittcEstimator(est.net, device=est.device, tta=tta)  # own cache, shared net
-
     def geofence(k: int, tta: str = "none"):
-        e, thr = estimator(tta), taus(k)
+        e, thr = est.fork(tta), _taus(cfg, k)
         return lambda a, b: e.geofence(a, b, thr)
 
     flow, flow_cont = FlowEstimator(), FlowEstimator()
     calls = {k: geofence(k) for k in s.thresholds}
-    calls["continuous"] = estimator().continuous
+    calls["continuous"] = est.fork().continuous
     calls["flip_1"] = geofence(1, "flip")
-    calls["flip_continuous"] = estimator("flip").continuous
+    calls["flip_continuous"] = est.fork("flip").continuous
     calls["flow_geofence"] = lambda a, b: flow.geofence(a, b, [1.0, 2.0])
     calls["flow_continuous"] = flow_cont.continuous
     ms = _interleaved_median_ms(calls, frames, s.warmup)
@@ -125,3 +143,34 @@ def run_benchmark(s: BenchSettings = BenchSettings(), weights: str | None = None
             "continuous_ms": ms["continuous"], "flip_one_threshold_ms": ms["flip_1"],
             "flip_continuous_ms": ms["flip_continuous"], "flow_geofence_ms": ms["flow_geofence"],
             "flow_continuous_ms": ms["flow_continuous"]}
+
+
+def run_backend_comparison(s: BenchSettings, estimators: dict) -> dict:
+    """backend name -> estimator (the same network on each): every K and the continuous mode
+    of every backend timed in the same interleaved rounds; prints the table side by side
+    with the ratios to the first backend. -> backend -> {binary_ms, continuous_ms, ...}."""
+    torch.set_num_threads(s.threads)
+    frames = _frames(s, s.calls + s.warmup + 1)
+    calls = {}
+    for name, est in estimators.items():
+        calls |= backend_calls(est, s, prefix=f"{name}:")
+    ms = _interleaved_median_ms(calls, frames, s.warmup)
+    names = list(estimators)
+    base = names[0]
+    out = {}
+    for name in names:
+        binary = {k: ms[f"{name}:{k}"] for k in s.thresholds}
+        ratios, slope = extra_threshold_ratios(binary)
+        out[name] = {"binary_ms": binary, "continuous_ms": ms[f"{name}:continuous"], "extra_over_one": ratios,
+                     "extra_over_one_slope": slope}  # fmt: skip
+    print(f"{s.height_px}x{s.width_px} px, {s.threads} threads each, streaming, interleaved rounds "
+          f"({s.calls} timed calls per setting)")
+    head = f"{'K':>10}" + "".join(f"{n + ' ms':>16}" for n in names) + "".join(f"{n + '/' + base:>24}" for n in names[1:])
+    print(head)
+    for k in [*s.thresholds, "continuous"]:
+        key = "continuous_ms" if k == "continuous" else None
+        vals = [out[n][key] if key else out[n]["binary_ms"][k] for n in names]
+        print(f"{k!s:>10}" + "".join(f"{v:>16.2f}" for v in vals) + "".join(f"{v / vals[0]:>24.3f}" for v in vals[1:]))
+    print(f"{'extra/one':>10}" + "".join(f"{out[n]['extra_over_one_slope']:>16.3f}" for n in names)
+          + "   (least-squares slope over K, in units of one threshold)")  # fmt: skip
+    return out

@@ -26,6 +26,9 @@ TRAIN_DEFAULT_HINT = (
     "bash docs/train_default_weights.sh DATA_V1 DATA_V2 OUT (README: Training and the shipped weights)"
 )
 REQUIRED_KEYS = ("config", "config_name", "state_dict", "train_meta")
+#: the release name of the shipped file (docs/releases.md), which predates names stored in
+#: checkpoints (``train_meta["release"]``)
+SHIPPED_RELEASE = "bittc-2026.11"
 
 
 class CheckpointError(CliError, ValueError):
@@ -66,6 +69,15 @@ def release_payload(ckpt: dict) -> dict:
     """What a shipped file keeps of a loaded checkpoint: ``REQUIRED_KEYS`` only (not the
     resumable ``train_state``, nor ``model_config``, which loading derives)."""
     return {k: ckpt[k] for k in REQUIRED_KEYS}
+
+
+def release_name(ckpt: dict, path: str | os.PathLike) -> str | None:
+    """The release name of a loaded checkpoint: ``train_meta["release"]``, the shipped
+    file's name, or None for an unnamed file."""
+    name = ckpt["train_meta"].get("release")
+    if name is None and Path(path).resolve() == DEFAULT_WEIGHTS:
+        name = SHIPPED_RELEASE
+    return name
 
 
 def load_checkpoint(path: str | os.PathLike, map_location: str | torch.device = "cpu",

@@ -283,12 +283,17 @@ def _config(thresholds_s, frame_stride: int | None) -> GeofenceConfig:
 
 
 def make_geofence(thresholds_s=None, weights: str | None = None, frame_stride: int | None = None, device: str = "cpu",
-                  name: str = "geofence") -> GeofenceController:
-    """The shipped network (or ``weights``) behind the geofence controller."""
+                  name: str = "geofence", backend: str = "torch", onnx: str | None = None) -> GeofenceController:
+    """The shipped network (or ``weights``) behind the geofence controller; ``backend=
+    "onnxruntime", onnx=DIR``: the same weights exported to ``DIR`` (checked against them)."""
+    from bittc_core.checkpoint import DEFAULT_WEIGHTS
     from bittc_core.estimator import make_estimator
 
-    return GeofenceController(make_estimator("bittc", weights=weights, device=device), _config(thresholds_s, frame_stride),
-                              name=name)
+    if backend == "onnxruntime":
+        est = make_estimator("bittc", weights=weights or DEFAULT_WEIGHTS, backend=backend, onnx=onnx)
+    else:
+        est = make_estimator("bittc", weights=weights, device=device, backend=backend, onnx=onnx)
+    return GeofenceController(est, _config(thresholds_s, frame_stride), name=name)
 
 
 def make_flow(thresholds_s=None, frame_stride: int | None = None, name: str = "flow") -> GeofenceController:

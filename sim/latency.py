@@ -17,11 +17,18 @@ Latency modes (``parse_latency``):
                       frame by frame (not reproducible: it says so in the outputs);
     ``fixed:MS``      L = MS milliseconds (deterministic);
     ``profile:NAME``  L = a + b * K milliseconds with K thresholds, from a named device
-                      profile (``PROFILES``, listed by ``bittc profiles``; deterministic).
+                      profile (``named_profiles()``, listed by ``bittc profiles``; deterministic);
+    ``profile:FILE``  the same from a profile file made by ``bittc profile --out FILE``
+                      (a path: it ends in .yaml / .yml or holds a /; ``sim.profile_file``).
+
+Named profiles: the hand-written ones of ``latency_profiles.yaml`` (assumed or scaled
+devices) and the measured files of ``device_profiles/`` (each made by ``bittc profile``,
+named by its file name).
 """
 
 from __future__ import annotations
 
+import functools
 import heapq
 import math
 from dataclasses import dataclass
@@ -32,6 +39,7 @@ import yaml
 from bittc_core.errors import ConfigError
 
 PROFILES_FILE = Path(__file__).resolve().parent / "latency_profiles.yaml"
+MEASURED_PROFILES_DIR = Path(__file__).resolve().parent / "device_profiles"
 TIME_EPS_S = 1e-9  # [s] tolerance when comparing times on the frame grid
 MAX_LATENCY_MS = 10_000.0  # [ms] a latency above this is surely a typo
 
@@ -77,7 +85,22 @@ def load_profiles(path: Path = PROFILES_FILE) -> dict[str, DeviceProfile]:
     return out
 
 
-PROFILES = load_profiles()
+@functools.cache
+def named_profiles() -> dict[str, DeviceProfile]:
+    """The hand-written profiles and the measured files of ``MEASURED_PROFILES_DIR`` (read
+    once, on first use: ``sim.profile_file`` builds on this module)."""
+    from sim.profile_file import read_profile_file
+
+    out = load_profiles()
+    for path in sorted(MEASURED_PROFILES_DIR.glob("*.yaml")):
+        if path.stem in out:
+            raise LatencyError(f"{path}: profile {path.stem!r} is also defined in {PROFILES_FILE}")
+        out[path.stem] = read_profile_file(path, name=path.stem)
+    return out
+
+
+def is_profile_file(arg: str) -> bool:
+    return arg.endswith((".yaml", ".yml")) or "/" in arg
 
 
 @dataclass(frozen=True)
@@ -118,7 +141,7 @@ def check_latency_s(latency_s: float) -> float:
 
 def parse_latency(text: str, profiles: dict[str, DeviceProfile] | None = None) -> LatencyMode:
     """'measured' | 'fixed:MS' | 'profile:NAME' -> LatencyMode; anything else is refused by name."""
-    profiles = PROFILES if profiles is None else profiles
+    profiles = named_profiles() if profiles is None else profiles
     text = str(text).strip()
     if text == "measured":
         return LatencyMode("measured")
@@ -132,10 +155,14 @@ def parse_latency(text: str, profiles: dict[str, DeviceProfile] | None = None) -
             raise LatencyError(f"latency {text!r}: fixed:MS needs a number of milliseconds in [0, {MAX_LATENCY_MS:g}]")
         return LatencyMode("fixed", fixed_ms=ms)
     if kind == "profile" and sep:
+        if is_profile_file(arg):
+            from sim.profile_file import read_profile_file
+
+            return LatencyMode("profile", profile=read_profile_file(arg))
         if arg not in profiles:
             raise LatencyError(f"latency {text!r}: unknown profile {arg!r}; known: {', '.join(sorted(profiles))}")
         return LatencyMode("profile", profile=profiles[arg])
-    raise LatencyError(f"latency {text!r}: expected measured, fixed:MS or profile:NAME")
+    raise LatencyError(f"latency {text!r}: expected measured, fixed:MS, profile:NAME or profile:FILE")
 
 
 # ---------------------------------------------------------------------------- schedule

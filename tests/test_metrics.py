@@ -173,7 +173,7 @@ def test_eval_of_the_oracle_is_perfect_and_writes_json(tmp_path):
 
     out = tmp_path / "o.json"
     a = argparse.Namespace(data="synthetic", method="oracle", weights=None, out=str(out), split="val",
-                           limit=2, device="cpu", tta="none", scenarios=None)
+                           limit=2, device="cpu", tta="none", scenarios=None, backend="torch", onnx=None)
     assert eval_cmd.run(a) == 0
     r = json.loads(out.read_text())
     assert r["miou"] == pytest.approx(1.0) and r["mid"] == pytest.approx(0.0) and r["pairs"] == 2

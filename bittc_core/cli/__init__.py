@@ -32,6 +32,8 @@ COMMANDS: dict[str, str] = {
     "bench": "bittc_core.cli.bench_cmd",
     "predict": "bittc_core.cli.predict_cmd",
     "profiles": "bittc_core.cli.profiles_cmd",
+    "profile": "bittc_core.cli.profile_cmd",
+    "export": "bittc_core.cli.export_cmd",
     "sweep": "bittc_core.cli.sweep_cmd",
     "demo": "bittc_core.cli.demo_cmd",
 }

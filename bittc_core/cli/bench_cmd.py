@@ -8,32 +8,97 @@ import sys
 from bittc_core.cli.common import check_frame_size, parse_size
 from bittc_core.errors import CliError
 
+DEFAULT_CONFIG = "cpu-small-corr"
+
 
 def add_parser(sub) -> argparse.ArgumentParser:
     p = sub.add_parser("bench", help="CPU latency of the network vs. number of thresholds",
                        description="Streaming latency (96x288 unless --size) for K = 1, 2, 4, 8, 16, 24 thresholds, "
-                       "binary and continuous, plain and flip-averaged, with the flow baseline timed in the same run.")
-    p.add_argument("--config", default="cpu-small-corr", help="model config (ignored with --weights; default: the shipped one)")
+                       "binary and continuous, plain and flip-averaged, with the flow baseline timed in the same run. "
+                       "With --backend torch onnxruntime: both backends timed in the same interleaved rounds, "
+                       "side by side with their ratios.")  # fmt: skip
+    p.add_argument("--config", default=None, help=f"model config of random weights (default {DEFAULT_CONFIG}, "
+                   "the shipped one); not with --weights")
     p.add_argument("--weights", default=None, help="time this checkpoint instead of random weights")
+    p.add_argument("--backend", nargs="+", default=["torch"], choices=("torch", "onnxruntime"),
+                   help="backends to time (default torch); onnxruntime times the shipped weights (or --weights) "
+                   "exported to --onnx DIR, or to a temporary folder without it")
+    p.add_argument("--onnx", default=None, metavar="DIR", help="with --backend onnxruntime: `bittc export --onnx DIR`")
     p.add_argument("--calls", type=int, default=30, help="timed calls per setting (default 30)")
-    p.add_argument("--threads", type=int, default=2, help="torch threads (default 2)")
+    p.add_argument("--threads", type=int, default=2, help="torch / onnxruntime threads (default 2)")
     p.add_argument("--size", default="96x288", help="frame size HxW [px], multiples of 3 (default 96x288, the "
                    "shipped weights' camera)")
     return p
 
 
-def run(args) -> int:
-    from bittc_core.benchmark import BenchSettings, run_benchmark
+def check_common(args):
+    """-> (BenchSettings, backends); every flag checked."""
+    from bittc_core.benchmark import BenchSettings
     from bittc_core.model import CONFIGS
 
-    if args.config not in CONFIGS:
-        raise CliError(f"--config {args.config!r}: expected one of {sorted(CONFIGS)}")
+    if args.config is not None and args.weights is not None:
+        raise CliError(f"--config {args.config!r} with --weights: the checkpoint has its own config; give one of them")
+    config = args.config or DEFAULT_CONFIG
+    if config not in CONFIGS:
+        raise CliError(f"--config {config!r}: expected one of {sorted(CONFIGS)}")
     if args.calls <= 0 or args.threads <= 0:
         raise CliError(f"--calls {args.calls} / --threads {args.threads}: must be > 0")
+    backends = list(dict.fromkeys(args.backend))
+    if args.onnx is not None and "onnxruntime" not in backends:
+        raise CliError("--onnx applies to --backend onnxruntime")
+    if "onnxruntime" in backends:
+        if args.config is not None:
+            raise CliError("--config: the onnxruntime backend times trained weights (--weights, default the shipped ones)")
+        try:
+            import onnxruntime  # noqa: F401
+        except ImportError:
+            raise CliError("--backend onnxruntime needs onnxruntime: pip install -e '.[onnx]'") from None
     h, w = parse_size(args.size)
     check_frame_size((h, w), "bittc", f"--size {args.size}", hint="")
-    run_benchmark(BenchSettings(config=args.config, height_px=h, width_px=w, calls=args.calls,
-                                threads=args.threads), weights=args.weights)
+    return BenchSettings(config=config, height_px=h, width_px=w, calls=args.calls, threads=args.threads), backends
+
+
+def estimators_for(backends, weights, onnx, size_hw, threads, tmp_dir):
+    """backend -> estimator of the same weights; onnxruntime exports them into ``tmp_dir``
+    when no ``onnx`` folder is given."""
+    import time
+
+    import torch
+
+    from bittc_core.checkpoint import DEFAULT_WEIGHTS
+    from bittc_core.estimator import make_estimator
+
+    torch.set_num_threads(threads)
+    weights = weights or str(DEFAULT_WEIGHTS)
+    out = {}
+    for b in backends:
+        if b == "torch":
+            out[b] = make_estimator("bittc", weights=weights, device="cpu")
+            continue
+        if onnx is None:
+            from bittc_core.export.onnx_export import export_onnx
+
+            t0 = time.perf_counter()
+            onnx = f"{tmp_dir}/onnx"
+            export_onnx(weights, onnx, height_px=size_hw[0], width_px=size_hw[1])
+            print(f"exported {weights} to a temporary ONNX folder in {time.perf_counter() - t0:.0f} s")
+        out[b] = make_estimator("bittc", weights=weights, backend="onnxruntime", onnx=onnx)
+    return out
+
+
+def run(args) -> int:
+    import tempfile
+
+    from bittc_core.benchmark import run_backend_comparison, run_benchmark
+
+    settings, backends = check_common(args)
+    if backends == ["torch"]:
+        run_benchmark(settings, weights=args.weights)
+        return 0
+    with tempfile.TemporaryDirectory(prefix="bittc_bench_") as tmp:
+        ests = estimators_for(backends, args.weights, args.onnx, (settings.height_px, settings.width_px),
+                              settings.threads, tmp)  # fmt: skip
+        run_backend_comparison(settings, ests)
     return 0
 
 

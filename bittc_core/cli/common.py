@@ -94,3 +94,38 @@ def writable_dir(path: str) -> Path:
     except OSError as e:
         raise CliError(f"--out {path!r}: not writable ({e.strerror})") from None
     return p
+
+
+BACKENDS = ("torch", "onnxruntime")
+
+
+def add_backend_flags(parser) -> None:
+    parser.add_argument("--backend", default="torch", choices=BACKENDS,
+                        help="network backend: torch (default) or onnxruntime (needs --onnx DIR)")
+    parser.add_argument("--onnx", default=None, metavar="DIR",
+                        help="with --backend onnxruntime: a folder made by `bittc export --onnx DIR`")
+
+
+def backend_kwargs(args, method: str = "bittc") -> dict:
+    """-> {"backend", "onnx", "weights"} for ``make_estimator`` / the geofence controller
+    ({} for torch), checked."""
+    if args.backend not in BACKENDS:
+        raise CliError(f"--backend {args.backend!r}: expected one of {', '.join(BACKENDS)}")
+    if args.backend == "torch":
+        if args.onnx is not None:
+            raise CliError("--onnx applies to --backend onnxruntime")
+        return {}
+    if method != "bittc":
+        raise CliError(f"--backend onnxruntime runs the network, not {method!r}")
+    try:
+        import onnxruntime  # noqa: F401
+    except ImportError:
+        raise CliError("--backend onnxruntime needs onnxruntime: pip install -e '.[onnx]'") from None
+    if args.onnx is None:
+        raise CliError("--backend onnxruntime needs --onnx DIR (make it with `bittc export --onnx DIR`)")
+    if getattr(args, "device", "auto") not in ("auto", "cpu"):
+        raise CliError(f"--device {args.device}: the onnxruntime backend runs on the CPU")
+    from bittc_core.checkpoint import DEFAULT_WEIGHTS
+
+    # the export is checked against the weights asked for (the shipped ones by default)
+    return {"backend": "onnxruntime", "onnx": args.onnx, "weights": args.weights or str(DEFAULT_WEIGHTS)}

@@ -22,7 +22,7 @@ import time
 from pathlib import Path
 
 from bittc_core.atomic import write_text_atomic
-from bittc_core.cli.common import add_device_flag, check_device
+from bittc_core.cli.common import add_backend_flags, add_device_flag, backend_kwargs, check_device
 from bittc_core.errors import CliError
 
 METHODS = ("bittc", "flow", "oracle", "oracle-auc")
@@ -51,6 +51,7 @@ def add_parser(sub) -> argparse.ArgumentParser:
     p.add_argument("--tta", default="none", help="bittc only: 'flip' averages the network over the plain "
                    "and the mirrored frames (1.4-2.2x the latency); default 'none'")
     add_device_flag(p)
+    add_backend_flags(p)
     return p
 
 
@@ -70,6 +71,7 @@ def _check(args) -> Path:
     if args.tta != "none" and args.method != "bittc":
         raise CliError(f"--tta {args.tta!r} applies to --method bittc only, not {args.method!r}")
     check_device(args.device)
+    args.backend_kw = {"weights": args.weights} | backend_kwargs(args, args.method)
     if args.scenarios is not None:
         if args.method not in ("bittc", "flow"):
             raise CliError(f"--method {args.method!r}: --scenarios evaluates bittc or flow (the oracle reads the "
@@ -94,11 +96,15 @@ def _check(args) -> Path:
     return out
 
 
-def evaluate(estimator, dataset, limit: int | None) -> dict:
+def evaluate(estimator, dataset, limit: int | None, against=None) -> dict:
+    """The metrics of ``estimator`` on the first ``limit`` pairs; with ``against`` (another
+    backend of the same network) also their agreement (``backend_agreement``)."""
     from bittc_core.estimator import OracleEstimator
+    from bittc_core.export.parity import Agreement
     from bittc_core.metrics import MetricAccumulator, threshold_key
 
     acc = MetricAccumulator(dt_s=estimator.dt_s)
+    agreement = Agreement(acc.thresholds_s) if against is not None else None
     n = len(dataset) if limit is None else min(limit, len(dataset))
     for i in range(n):
         s = dataset[i]
@@ -111,11 +117,16 @@ def evaluate(estimator, dataset, limit: int | None) -> dict:
         prob = estimator.geofence(s["image_prev"], s["image_latest"], acc.thresholds_s)
         eta_hat = estimator.motion_in_depth(s["image_prev"], s["image_latest"])
         latency = (time.perf_counter() - t0) * 1e3
+        if agreement is not None:
+            agreement.add(prob, against.geofence(s["image_prev"], s["image_latest"], acc.thresholds_s), eta_hat,
+                          against.motion_in_depth(s["image_prev"], s["image_latest"]))  # fmt: skip
         speed = s.get("ego_speed_mps")
         acc.add(prob, eta_hat, s["eta"].numpy(), s["valid"].numpy().astype(bool),
                 s["instance"].numpy(), latency_ms=latency, ego_speed_mps=None if speed is None else float(speed))
     result = acc.result()
     result["pairs"] = n
+    if agreement is not None:
+        result["backend_agreement"] = agreement.result()
     result["miou_thresholds_s"] = [float(threshold_key(t)) for t in acc.miou_thresholds_s]
     return result
 
@@ -128,6 +139,10 @@ def format_table(r: dict) -> str:
     lines += [f"{'error rate tau=' + k + ' s':<22} {v:>10.4f}" for k, v in r["error_rate"].items()]
     lines += [f"{'actor IoU tau=' + k + ' s':<22} {v:>10.4f}" for k, v in r["actor_iou"].items()]
     lines.append(f"{'latency ms/pair':<22} {r['latency_ms']:>10.2f}")
+    if "backend_agreement" in r:
+        a = r["backend_agreement"]
+        lines.append(f"against torch: geofence pixels agreeing (min over thresholds) {a['geofence_pixels_agreeing_min']:.6f}, "
+                     f"|log eta| difference max {a['log_eta_abs_diff_max']:.2e}, p99.9 {a['log_eta_abs_diff_p999']:.2e}")
     b = r.get("breakdown")
     if b:
         lines.append(f"{'MiD actor / static':<22} {b['mid_actor']:>10.1f} / {b['mid_static']:.1f}")
@@ -161,7 +176,7 @@ def run_scenarios(args, out: Path) -> int:
     from sim.camera import CameraConfig
 
     cases = scenarios.resolve_suite(args.scenarios)
-    estimator = make_estimator(args.method, weights=args.weights, device=args.device, tta=args.tta)
+    estimator = make_estimator(args.method, device=args.device, tta=args.tta, **args.backend_kw)
     from tqdm import tqdm
 
     results = [scenario_eval.evaluate_case(c, estimator, args.tau, CameraConfig(), args.seed, args.frame_stride)
@@ -188,9 +203,12 @@ def run(args) -> int:
     from bittc_core.train.data import open_split
 
     dataset = open_split(args.data, args.split)
-    estimator = make_estimator(args.method, weights=args.weights, device=args.device, tta=args.tta)
-    result = {"method": args.method, "split": args.split, "data": args.data,
-              "weights": args.weights, "tta": args.tta, **evaluate(estimator, dataset, args.limit)}
+    estimator = make_estimator(args.method, device=args.device, tta=args.tta, **args.backend_kw)
+    against = None
+    if args.backend != "torch":  # the same pairs on torch, for the agreement
+        against = make_estimator(args.method, weights=args.weights, device="cpu", tta=args.tta)
+    result = {"method": args.method, "split": args.split, "data": args.data, "weights": args.weights,
+              "tta": args.tta, "backend": args.backend, **evaluate(estimator, dataset, args.limit, against)}
     print(format_table(result))
     write_text_atomic(out, json.dumps(result, indent=2))
     print(f"wrote {out}")

@@ -19,11 +19,14 @@ def add_controller_flags(p: argparse.ArgumentParser, default: str | None = None)
     g.add_argument("--ttc-thresholds", type=float, nargs="+", default=None, metavar="S",
                    help="geofence/flow: explicit camera-plane TTC thresholds [s], any order")
     p.add_argument("--latency", default=None, metavar="MODE",
-                   help="measured, fixed:MS or profile:NAME (`bittc profiles`); default measured for "
+                   help="measured, fixed:MS, profile:NAME (`bittc profiles`) or profile:FILE (`bittc profile`); default measured for "
                         "camera controllers, fixed:0 otherwise")
     p.add_argument("--weights", default=None, help="geofence: network weights (default: the shipped ones)")
     p.add_argument("--frame-stride", type=int, default=None, metavar="N",
                    help="geofence/flow: pair each frame with the one N frames before (default 2)")
+    from bittc_core.cli.common import add_backend_flags
+
+    add_backend_flags(p)
 
 
 def controller_from_args(args, camera):
@@ -55,6 +58,12 @@ def controller_from_args(args, camera):
         if name != "geofence":
             raise CliError(f"--weights applies to the geofence controller, not {name!r}")
         settings["weights"] = args.weights
+    if args.backend != "torch" or args.onnx is not None:
+        from bittc_core.cli.common import backend_kwargs
+
+        if name != "geofence":
+            raise CliError(f"--backend / --onnx apply to the geofence controller, not {name!r}")
+        settings.update(backend_kwargs(args))
     if settings and name in controllers.REGISTRY and not takes_fences:
         raise CliError(f"--num-alphas / --ttc-thresholds / --frame-stride apply to "
                        f"{' and '.join(controllers.ESTIMATOR_CONTROLLERS)}, not {name!r}")

@@ -29,8 +29,8 @@ from pathlib import Path
 
 import numpy as np
 
-from bittc_core.cli.common import (add_device_flag, check_device, check_frame_size, parse_size,
-                                   writable_dir)
+from bittc_core.cli.common import (add_backend_flags, add_device_flag, backend_kwargs, check_device,
+                                   check_frame_size, parse_size, writable_dir)
 from bittc_core.errors import CliError
 
 METHODS = ("bittc", "flow")  # the oracle needs ground truth, which image files lack
@@ -49,6 +49,7 @@ def add_parser(sub) -> argparse.ArgumentParser:
     p.add_argument("--method", default="bittc", help="bittc (the network, default) or flow (the DIS baseline)")
     p.add_argument("--weights", default=None, help="checkpoint for bittc (default: shipped weights)")
     p.add_argument("--tta", default="none", help="bittc only: 'flip' averages over the mirrored frames")
+    add_backend_flags(p)
     p.add_argument("--size", default=None, metavar="HxW",
                    help="resize both frames to HxW px first (area interpolation); default: as they are")
     add_device_flag(p)
@@ -110,8 +111,8 @@ def run(args) -> int:
     if size is not None:
         prev, latest = (cv2.resize(img, size[::-1], interpolation=cv2.INTER_AREA) for img in (prev, latest))
     check_frame_size(latest.shape[:2], args.method, "--size" if size is not None else "PREV and LATEST")
-    est = make_estimator(args.method, weights=args.weights, device=args.device,
-                         **({"tta": args.tta} if args.method == "bittc" else {}))
+    kw = {"weights": args.weights} | backend_kwargs(args, args.method)
+    est = make_estimator(args.method, device=args.device, **kw, **({"tta": args.tta} if args.method == "bittc" else {}))
     thr = as_thresholds(args.tau, est.tau_range_s, sorted_=False)
     if len(np.unique(thr)) != len(thr):
         raise CliError(f"--tau {' '.join(f'{t:g}' for t in thr)}: a threshold is given twice")
@@ -127,7 +128,7 @@ def run(args) -> int:
     quantized = quantize(geofence[order]).astype(np.int16)
 
     summary = {
-        "method": args.method, "weights": args.weights, "tta": args.tta,
+        "method": args.method, "weights": args.weights, "tta": args.tta, "backend": args.backend,
         "device": str(getattr(est, "device", "cpu")),
         "prev": args.prev, "latest": args.latest, "size_hw": list(latest.shape[:2]),
         "frame_dt_s": est.dt_s, "thresholds_s": thr.tolist(),

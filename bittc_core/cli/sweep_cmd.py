@@ -22,7 +22,7 @@ def add_parser(sub) -> argparse.ArgumentParser:
     p.add_argument("--num-alphas", type=int, nargs="+", default=[1, 2, 4, 8, 16], metavar="K",
                    help="threshold counts for geofence/flow (default 1 2 4 8 16)")
     p.add_argument("--latency", nargs="+", default=["measured"], metavar="MODE",
-                   help="latency modes: measured, fixed:MS, profile:NAME (default measured)")
+                   help="latency modes: measured, fixed:MS, profile:NAME, profile:FILE (default measured)")
     p.add_argument("--seeds", type=int, default=1, help="seeds 0..N-1 per run (default 1)")
     p.add_argument("--out", required=True, help="output directory (new, or this sweep's with --resume)")
     p.add_argument("--workers", type=int, default=1, help="parallel runs (default 1; see the report on measured latency)")
@@ -34,12 +34,16 @@ def add_parser(sub) -> argparse.ArgumentParser:
     p.add_argument("--video", nargs="+", default=[], metavar="CASE", help="also write camera.mp4 for these cases' runs")
     p.add_argument("--timeline-case", default=None, metavar="CASE",
                    help="the case of the timeline plot (default: the first threat case)")
+    p.add_argument("--net-backend", default="torch", choices=("torch", "onnxruntime"),
+                   help="geofence: the network on torch (default) or onnxruntime (needs --onnx DIR)")
+    p.add_argument("--onnx", default=None, metavar="DIR", help="with --net-backend onnxruntime: `bittc export --onnx DIR`")
     return p
 
 
 _FLAGS = {"suites": "--suite", "controllers": "--controllers", "num_alphas": "--num-alphas", "latencies": "--latency",
           "seeds": "--seeds", "weights": "--weights", "frame_stride": "--frame-stride", "video_cases": "--video",
-          "timeline_case": "--timeline-case", "workers": "--workers"}  # fmt: skip
+          "timeline_case": "--timeline-case", "workers": "--workers", "net_backend": "--net-backend",
+          "onnx": "--onnx"}  # fmt: skip
 
 
 def _flag_error(e: ConfigError) -> CliError:
@@ -57,7 +61,7 @@ def settings_from_args(args):
     return SweepSettings(suites=tuple(args.suite), controllers=tuple(args.controllers),
                          num_alphas=tuple(args.num_alphas), latencies=tuple(args.latency), seeds=args.seeds,
                          weights=args.weights, frame_stride=args.frame_stride, video_cases=tuple(args.video),
-                         timeline_case=args.timeline_case)  # fmt: skip
+                         timeline_case=args.timeline_case, net_backend=args.net_backend, onnx=args.onnx)  # fmt: skip
 
 
 def execute(settings, args, command: str) -> int:

@@ -1,6 +1,8 @@
 """Estimators of binary / quantized / continuous TTC behind one interface.
 
-``make_estimator("bittc" | "flow" | "oracle" | "oracle-auc", weights=None, device="auto", tta="none")``;
+``make_estimator("bittc" | "flow" | "oracle" | "oracle-auc", weights=None, device="auto", tta="none",
+backend="torch", onnx=None)``; ``backend="onnxruntime", onnx=DIR``: the network exported to
+``DIR`` (``bittc export --onnx DIR``) on onnxruntime, checked against ``weights`` when given;
 ``oracle-auc``: exact geofences, continuous output from their AUC at the shipped network's levels;
 ``tta="flip"`` (network only) averages each call over the plain and the mirrored frames.
 """
@@ -14,12 +16,27 @@ from bittc_core.estimator.network import TTA_MODES, BittcEstimator
 from bittc_core.estimator.oracle import OracleEstimator
 
 METHODS = ("bittc", "flow", "oracle", "oracle-auc")
+BACKENDS = ("torch", "onnxruntime")
 
 
 def make_estimator(method: str, weights: str | None = None, device: str = "auto",
-                   tta: str = "none") -> Estimator:
+                   tta: str = "none", backend: str = "torch", onnx: str | None = None) -> Estimator:
     if method not in METHODS:
         raise EstimatorInputError(f"unknown method {method!r}; expected one of {METHODS}")
+    if backend not in BACKENDS:
+        raise EstimatorInputError(f"backend {backend!r}: expected one of {BACKENDS}")
+    if backend == "onnxruntime":
+        if method != "bittc":
+            raise EstimatorInputError(f"backend 'onnxruntime' runs the network (method 'bittc'), not {method!r}")
+        if onnx is None:
+            raise EstimatorInputError("backend 'onnxruntime' needs onnx=DIR, a folder made by `bittc export --onnx DIR`")
+        if device not in ("auto", "cpu"):
+            raise EstimatorInputError(f"device {device!r}: the onnxruntime backend runs on the CPU")
+        from bittc_core.estimator.onnx import OnnxBittcEstimator
+
+        return OnnxBittcEstimator(onnx, weights=weights, tta=tta)
+    if onnx is not None:
+        raise EstimatorInputError(f"onnx={onnx!r} applies to backend 'onnxruntime', not {backend!r}")
     if method == "bittc":
         return BittcEstimator.from_checkpoint(weights, device=device, tta=tta)
     if weights is not None:
@@ -35,4 +52,4 @@ def make_estimator(method: str, weights: str | None = None, device: str = "auto"
 
 
 __all__ = ["Estimator", "EstimatorInputError", "quantize", "BittcEstimator", "FlowEstimator",
-           "FlowBaselineConfig", "OracleEstimator", "make_estimator", "METHODS", "TTA_MODES"]
+           "FlowBaselineConfig", "OracleEstimator", "make_estimator", "METHODS", "BACKENDS", "TTA_MODES"]

@@ -53,7 +53,8 @@ def _controller(spec: RunSpec, settings: SweepSettings):
     import controllers
     from controllers.geofence import default_thresholds
 
-    key = (spec.controller, spec.num_alphas, settings.weights, settings.frame_stride)
+    key = (spec.controller, spec.num_alphas, settings.weights, settings.frame_stride, settings.net_backend,
+           settings.onnx)  # fmt: skip
     if key not in _CONTROLLERS:
         kw = {}
         if spec.controller in controllers.ESTIMATOR_CONTROLLERS:
@@ -62,6 +63,8 @@ def _controller(spec: RunSpec, settings: SweepSettings):
                 kw["frame_stride"] = settings.frame_stride
         if spec.controller == "geofence" and settings.weights is not None:
             kw["weights"] = settings.weights
+        if spec.controller == "geofence" and settings.net_backend != "torch":
+            kw["backend"], kw["onnx"] = settings.net_backend, settings.onnx
         _CONTROLLERS[key] = controllers.make(spec.controller, **kw)
     return _CONTROLLERS[key]
 

@@ -10,6 +10,7 @@ row order of ``results.csv`` whatever the order they finish in.
 from __future__ import annotations
 
 import json
+import re
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
@@ -18,6 +19,7 @@ from bittc_core.errors import ConfigError
 SETTINGS_FILE = "sweep.json"
 MAX_SEEDS = 1000
 MAX_NUM_ALPHAS = 64
+NET_BACKENDS = ("torch", "onnxruntime")
 
 
 @dataclass(frozen=True)
@@ -34,6 +36,8 @@ class SweepSettings:
     frame_stride: int | None = None  # geofence/flow: None for the controller's default
     video_cases: tuple[str, ...] = ()  # cases whose runs also write camera.mp4
     timeline_case: str | None = None  # the case of the timeline plot (None: the first threat)
+    net_backend: str = "torch"  # geofence: the network on torch or onnxruntime
+    onnx: str | None = None  # with net_backend "onnxruntime": the export folder
 
     def to_json(self) -> str:
         return json.dumps(asdict(self), indent=2, sort_keys=True) + "\n"
@@ -61,13 +65,18 @@ class RunSpec:
     @property
     def config_id(self) -> str:
         """The controller x K x latency configuration, e.g. ``geofence-K4-fixed_50``."""
-        name = self.controller.replace("/", "_").replace(":", "_").replace(".", "_")
         k = f"-K{self.num_alphas}" if self.num_alphas else ""
-        return f"{name}{k}-{self.latency.replace(':', '_')}"
+        return f"{_slug(self.controller)}{k}-{_slug(self.latency)}"
 
     @property
     def run_id(self) -> str:
         return f"{self.config_id}/{self.case}-s{self.seed}"
+
+
+def _slug(text: str) -> str:
+    """A folder-safe spelling: every run of characters other than letters, digits, _ and -
+    becomes one _ (``fixed:50`` -> ``fixed_50``, ``profile:my/dev.yaml`` -> ``profile_my_dev_yaml``)."""
+    return re.sub(r"[^A-Za-z0-9_-]+", "_", text)
 
 
 def check_settings(s: SweepSettings) -> list:
@@ -98,6 +107,7 @@ def check_settings(s: SweepSettings) -> list:
         raise ConfigError("weights: apply to the geofence controller, which the sweep does not run")
     if s.weights is not None and not Path(s.weights).is_file():
         raise ConfigError(f"weights: no file {s.weights!r}")
+    _check_net_backend(s)
     if s.frame_stride is not None and not 1 <= s.frame_stride <= 10:
         raise ConfigError(f"frame_stride: {s.frame_stride} must be in [1, 10]")
     cases = suite_cases(s.suites)
@@ -106,6 +116,27 @@ def check_settings(s: SweepSettings) -> list:
         if name not in names:
             raise ConfigError(f"case {name!r} is not in the sweep's suites")
     return cases
+
+
+def _check_net_backend(s: SweepSettings) -> None:
+    if s.net_backend not in NET_BACKENDS:
+        raise ConfigError(f"net_backend: {s.net_backend!r} must be one of {', '.join(NET_BACKENDS)}")
+    if s.net_backend == "torch":
+        if s.onnx is not None:
+            raise ConfigError("onnx: an export folder applies to the onnxruntime network backend")
+        return
+    if "geofence" not in s.controllers:
+        raise ConfigError("net_backend: onnxruntime runs the geofence controller's network, which the sweep does not run")
+    if s.onnx is None:
+        raise ConfigError("onnx: the onnxruntime network backend needs an export folder (`bittc export --onnx DIR`)")
+    from bittc_core.checkpoint import DEFAULT_WEIGHTS, load_checkpoint
+    from bittc_core.estimator.onnx import require_onnxruntime
+    from bittc_core.export.graphs import GRAPHS
+    from bittc_core.export.manifest import check_matches_checkpoint, read_manifest
+
+    require_onnxruntime()
+    weights = s.weights or DEFAULT_WEIGHTS
+    check_matches_checkpoint(read_manifest(s.onnx, graphs=GRAPHS), s.onnx, load_checkpoint(weights), weights)
 
 
 def suite_cases(suites: tuple[str, ...]) -> list:

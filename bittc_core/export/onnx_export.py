@@ -1,0 +1,154 @@
+"""Export a checkpoint's streaming network to an ONNX folder (``bittc export --onnx DIR``).
+
+Each graph of ``bittc_core.export.graphs`` goes through the torch exporter (torch.export,
+dynamic axes V and K), is checked with ``onnx.checker`` and listed with its hash in the
+manifest (``bittc_core.export.manifest``). The folder is written whole or not at all: into
+a temporary folder beside it, renamed at the end; an existing export folder is replaced,
+any other non-empty folder refused.
+"""
+
+from __future__ import annotations
+
+import datetime
+import json
+import os
+import shutil
+import tempfile
+import warnings
+from dataclasses import asdict
+from pathlib import Path
+
+from bittc_core.export.manifest import FORMAT, MANIFEST, ExportError, sha256_file
+
+OPSET = 18
+DEFAULT_SIZE_PX = (96, 288)  # (H, W): the default camera's frames, which the shipped weights were trained on
+EXAMPLE_VIEWS = 2  # example sizes of the dynamic axes (not 0 or 1: torch.export would fix them)
+EXAMPLE_THRESHOLDS = 3
+VARARGS_GRAPHS = ("thresholds", "continuous")  # their forward takes *args (the reference terms vary by config)
+
+
+def require_onnx() -> None:
+    """Raise a clear error when the optional ONNX packages are missing."""
+    missing = []
+    for module in ("onnx", "onnxruntime", "onnxscript"):
+        try:
+            __import__(module)
+        except ImportError:
+            missing.append(module)
+    if missing:
+        raise ExportError(f"ONNX support needs {', '.join(missing)}: pip install -e '.[onnx]'")
+
+
+def _specs(net, height_px: int, width_px: int):
+    """graph -> (module, example args, input names, output names, dynamic shapes)."""
+    import torch
+    from torch.export import Dim
+
+    from bittc_core.export import graphs as G
+
+    views, thr = Dim("views", min=1, max=8), Dim("thresholds", min=1, max=256)
+    v = EXAMPLE_VIEWS
+    g = torch.Generator().manual_seed(0)
+    image = torch.rand(v, 3, height_px, width_px, generator=g)
+    ext = G.ExtractorGraph(net, height_px, width_px)
+    with torch.no_grad():
+        feats = ext(image)
+        ref_graph = G.ReferenceGraph(net, height_px, width_px)
+        refs = ref_graph(feats, image)
+    names = ref_graph.ref_names
+    eta = torch.linspace(0.7, 1.0, EXAMPLE_THRESHOLDS)[None].repeat(v, 1)
+    on_views = lambda n: tuple({0: views} for _ in range(n))  # noqa: E731
+    return {
+        "extractor": (ext, (image,), ["image"], ["features"], on_views(1)),
+        "reference": (ref_graph, (feats, image), ["features_latest", "image_latest"], list(names), on_views(2)),
+        "thresholds": (G.ThresholdsGraph(net, height_px, width_px), (*refs, feats, eta),
+                       [*names, "features_prev", "eta"], ["logits"],
+                       (*on_views(len(names) + 1), {0: views, 1: thr})),
+        "continuous": (G.ContinuousGraph(net, height_px, width_px), (*refs, image, feats),
+                       [*names, "image_latest", "features_prev"], ["log_eta"], on_views(len(names) + 2)),
+    }  # fmt: skip
+
+
+def _io(values, names, dynamic) -> list[dict]:
+    out = []
+    for value, name, dims in zip(values, names, dynamic):
+        shape = [({0: "views", 1: "thresholds"}.get(i) if i in dims else int(s)) for i, s in enumerate(value.shape)]
+        out.append({"name": name, "shape": shape, "dtype": "float32"})
+    return out
+
+
+def export_onnx(weights: str | Path, out: str | Path, *, height_px: int | None = None,
+                width_px: int | None = None) -> dict:  # fmt: skip
+    """Export ``weights`` into the folder ``out``; -> the manifest."""
+    require_onnx()
+    import onnx
+    import torch
+
+    from bittc_core.checkpoint import build_network, load_checkpoint, release_name
+    from bittc_core.export.graphs import GRAPHS
+
+    out = Path(out)
+    if out.exists() and (not out.is_dir() or (any(out.iterdir()) and not (out / MANIFEST).is_file())):
+        raise ExportError(f"{str(out)!r}: exists and is not an ONNX export folder; choose another folder")
+    ckpt = load_checkpoint(weights, map_location="cpu")
+    net = build_network(ckpt).eval()
+    cfg = ckpt["model_config"]
+    h, w = height_px or DEFAULT_SIZE_PX[0], width_px or DEFAULT_SIZE_PX[1]
+    specs = _specs(net, h, w)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.", suffix=".partial", dir=out.parent))
+    umask = os.umask(0)
+    os.umask(umask)
+    os.chmod(tmp, 0o777 & ~umask)  # mkdtemp makes it private; the export is an ordinary folder
+    try:
+        entries = {}
+        for name in GRAPHS:
+            module, args, in_names, out_names, dynamic = specs[name]
+            path = tmp / f"{name}.onnx"
+            with warnings.catch_warnings(), torch.no_grad():
+                warnings.simplefilter("ignore")
+                # a forward(*args) is one parameter to torch.export: its specs go as one tuple
+                shapes = (dynamic,) if name in VARARGS_GRAPHS else dynamic
+                torch.onnx.export(module, args, str(path), input_names=in_names, output_names=out_names,
+                                  dynamic_shapes=shapes, opset_version=OPSET, dynamo=True, external_data=False,
+                                  verbose=False)  # fmt: skip
+                outputs = module(*args)
+            onnx.checker.check_model(str(path), full_check=True)
+            outputs = outputs if isinstance(outputs, tuple) else (outputs,)
+            out_dynamic = [{0: "views", 1: "thresholds"} if name == "thresholds" else {0: "views"}] * len(outputs)
+            entries[name] = {"file": path.name, "sha256": sha256_file(path), "inputs": _io(args, in_names, dynamic),
+                             "outputs": _io(outputs, out_names, out_dynamic)}
+        manifest = {
+            "format": FORMAT,
+            "config_name": ckpt["config_name"],
+            "model_config": json.loads(json.dumps(asdict(cfg))),
+            "weights": {"file": Path(weights).name, "sha256": sha256_file(weights), "release": release_name(ckpt, weights)},
+            "image": {"height_px": h, "width_px": w, "layout": "NCHW", "channels": "RGB", "range": [0.0, 1.0],
+                      "normalisation": "(x - 0.5) / 0.5, inside the graphs"},
+            "frame_dt_s": cfg.frame_dt_s,
+            "tau_range_s": [cfg.tau_min_s, cfg.tau_max_s],
+            "eta_range": [cfg.tau_min_s / (cfg.tau_min_s + cfg.frame_dt_s), cfg.tau_max_s / (cfg.tau_max_s + cfg.frame_dt_s)],
+            "continuous": {"eta_min": cfg.cont_eta_min, "eta_max": cfg.cont_eta_max, "levels": cfg.cont_levels},
+            "opset": OPSET,
+            "graphs": entries,
+            "exporter": {"torch": torch.__version__, "onnx": onnx.__version__,
+                         "created": datetime.date.today().isoformat()},
+        }  # fmt: skip
+        (tmp / MANIFEST).write_text(json.dumps(manifest, indent=2) + "\n")
+        _swap_in(tmp, out)
+        return manifest
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+
+
+def _swap_in(tmp: Path, out: Path) -> None:
+    """Replace ``out`` (absent, empty or an export folder) by ``tmp``."""
+    old = None
+    if out.exists():
+        old = out.with_name(f".{out.name}.old")
+        shutil.rmtree(old, ignore_errors=True)
+        os.replace(out, old)
+    os.replace(tmp, out)
+    if old is not None:
+        shutil.rmtree(old, ignore_errors=True)

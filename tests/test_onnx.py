@@ -1,0 +1,172 @@
+"""ONNX export, the onnxruntime backend and its checks (skipped without the `onnx` extra)."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import sys
+
+import numpy as np
+import pytest
+import torch
+
+pytest.importorskip("onnx")
+pytest.importorskip("onnxruntime")
+pytest.importorskip("onnxscript")
+
+from bittc_core.checkpoint import DEFAULT_WEIGHTS, make_payload, save_checkpoint  # noqa: E402
+from bittc_core.cli import main  # noqa: E402
+from bittc_core.estimator import make_estimator  # noqa: E402
+from bittc_core.export.manifest import MANIFEST, ExportError, read_manifest  # noqa: E402
+from bittc_core.export.onnx_export import export_onnx  # noqa: E402
+from bittc_core.export.parity import Agreement  # noqa: E402
+from bittc_core.model import BinaryTTCNet, get_config  # noqa: E402
+
+SIZE = (24, 48)  # (H, W) of the tiny network's test frames
+
+
+def _tiny_checkpoint(path, seed: int = 0):
+    torch.manual_seed(seed)
+    cfg = dataclasses.replace(get_config("tiny"), corr_groups=4)  # the correlation volume too
+    net = BinaryTTCNet(cfg).eval()
+    save_checkpoint(path, make_payload(net, "tiny", {"frame_dt_s": cfg.frame_dt_s}))
+    return path
+
+
+def _zoom_pair(h: int, w: int, seed: int, zoom: float = 1.05):
+    """A smooth random texture and the same texture zoomed about the centre (approaching)."""
+    import cv2
+
+    rng = np.random.default_rng(seed)
+    base = cv2.resize(rng.integers(0, 256, (h // 4 + 1, w // 4 + 1, 3), dtype=np.uint8), (w, h))
+    m = cv2.getRotationMatrix2D(((w - 1) / 2, (h - 1) / 2), 0.0, zoom)
+    return base, cv2.warpAffine(base, m, (w, h), borderMode=cv2.BORDER_REFLECT)
+
+
+@pytest.fixture(scope="module")
+def tiny_export(tmp_path_factory):
+    d = tmp_path_factory.mktemp("tiny")
+    ckpt = _tiny_checkpoint(d / "tiny.pt")
+    export_onnx(ckpt, d / "onnx", height_px=SIZE[0], width_px=SIZE[1])
+    return ckpt, d / "onnx"
+
+
+def test_tiny_round_trip_matches_torch(tiny_export):
+    ckpt, folder = tiny_export
+    m = json.loads((folder / MANIFEST).read_text())
+    assert set(m["graphs"]) == {"extractor", "reference", "thresholds", "continuous"}
+    assert m["image"]["height_px"] == SIZE[0] and m["frame_dt_s"] == 0.1
+    eta_in = next(i for i in m["graphs"]["thresholds"]["inputs"] if i["name"] == "eta")
+    assert eta_in["shape"] == ["views", "thresholds"]
+    ref = make_estimator("bittc", weights=str(ckpt), device="cpu")
+    ort = make_estimator("bittc", weights=str(ckpt), backend="onnxruntime", onnx=str(folder))
+    thr = [0.3, 0.9, 1.6, 2.4, 3.0, 4.0, 5.0, 6.0, 8.0, 9.5]  # 10 > one run of the thresholds graph
+    for seed in range(3):
+        a, b = _zoom_pair(*SIZE, seed)
+        np.testing.assert_allclose(ort.geofence(a, b, thr), ref.geofence(a, b, thr), atol=2e-5)
+        np.testing.assert_allclose(np.log(ort.motion_in_depth(a, b)), np.log(ref.motion_in_depth(a, b)), atol=1e-4)
+    assert ort.feature_computations == 6  # the streaming cache: each frame extracted once
+
+
+def test_flip_averaging_matches_torch(tiny_export):
+    ckpt, folder = tiny_export
+    ref = make_estimator("bittc", weights=str(ckpt), device="cpu", tta="flip")
+    ort = make_estimator("bittc", weights=str(ckpt), backend="onnxruntime", onnx=str(folder), tta="flip")
+    a, b = _zoom_pair(*SIZE, 7)
+    np.testing.assert_allclose(ort.geofence(a, b, [1.0, 2.0]), ref.geofence(a, b, [1.0, 2.0]), atol=2e-5)
+
+
+def test_backend_input_checks_are_the_same(tiny_export):
+    ckpt, folder = tiny_export
+    ort = make_estimator("bittc", backend="onnxruntime", onnx=str(folder))
+    a, b = _zoom_pair(*SIZE, 0)
+    with pytest.raises(ValueError, match="outside the trained range"):
+        ort.geofence(a, b, [50.0])
+    with pytest.raises(ValueError, match="uint8"):
+        ort.geofence(a.astype(np.float32), b, [1.0])
+    big = np.zeros((48, 96, 3), np.uint8)
+    with pytest.raises(ValueError, match=r"\(24, 48\)"):
+        ort.geofence(big, big, [1.0])
+
+
+def test_export_of_other_weights_is_refused(tiny_export, tmp_path):
+    ckpt, folder = tiny_export
+    other = _tiny_checkpoint(tmp_path / "other.pt", seed=1)
+    with pytest.raises(ExportError, match="other weights"):
+        make_estimator("bittc", weights=str(other), backend="onnxruntime", onnx=str(folder))
+    with pytest.raises(ExportError, match="config"):
+        make_estimator("bittc", weights=str(DEFAULT_WEIGHTS), backend="onnxruntime", onnx=str(folder))
+
+
+def test_missing_or_corrupt_files_are_named(tiny_export, tmp_path):
+    import shutil
+
+    _, folder = tiny_export
+    bad = tmp_path / "bad"
+    shutil.copytree(folder, bad)
+    data = (bad / "thresholds.onnx").read_bytes()
+    (bad / "thresholds.onnx").write_bytes(data[: len(data) // 2])
+    with pytest.raises(ExportError, match="thresholds.onnx.*corrupt"):
+        make_estimator("bittc", backend="onnxruntime", onnx=str(bad))
+    (bad / "thresholds.onnx").unlink()
+    with pytest.raises(ExportError, match="thresholds.onnx.*missing"):
+        read_manifest(bad, graphs=("thresholds",))
+    (bad / MANIFEST).write_text("{not json")
+    with pytest.raises(ExportError, match="not valid JSON"):
+        read_manifest(bad, graphs=())
+    with pytest.raises(ExportError, match="no such folder"):
+        read_manifest(tmp_path / "nowhere", graphs=())
+
+
+def test_export_refuses_a_foreign_folder_and_writes_nothing(tmp_path):
+    ckpt = _tiny_checkpoint(tmp_path / "t.pt")
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    (mine / "notes.txt").write_text("keep")
+    with pytest.raises(ExportError, match="not an ONNX export folder"):
+        export_onnx(ckpt, mine, height_px=SIZE[0], width_px=SIZE[1])
+    assert [p.name for p in mine.iterdir()] == ["notes.txt"]
+    assert not [p for p in tmp_path.iterdir() if p.name.endswith(".partial")]
+
+
+def test_cli_says_how_to_install_onnxruntime(tmp_path, capsys, monkeypatch):
+    monkeypatch.setitem(sys.modules, "onnxruntime", None)
+    a, b = _zoom_pair(96, 288, 0)
+    import cv2
+
+    cv2.imwrite(str(tmp_path / "a.png"), a)
+    cv2.imwrite(str(tmp_path / "b.png"), b)
+    argv = ["predict", str(tmp_path / "a.png"), str(tmp_path / "b.png"), "--backend", "onnxruntime",
+            "--onnx", str(tmp_path), "--out", str(tmp_path / "out")]  # fmt: skip
+    assert main(argv) == 2
+    assert "pip install -e '.[onnx]'" in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()
+
+
+def test_agreement_counts_pixels_and_log_eta():
+    agr = Agreement([1.0, 2.0])
+    p = np.full((2, 2, 2), 0.9, np.float32)
+    q = p.copy()
+    q[1, 0, 0] = 0.1  # one pixel of four differs at 2 s
+    eta = np.ones((2, 2), np.float32)
+    agr.add(p, q, eta, eta * np.exp(2e-3))
+    r = agr.result()
+    assert r["geofence_pixels_agreeing"] == {"1": 1.0, "2": 0.75}
+    assert r["log_eta_within_0.001"] == 0.0 and abs(r["log_eta_abs_diff_max"] - 2e-3) < 1e-6
+
+
+@pytest.mark.slow
+def test_shipped_weights_agree_on_zoom_pairs(tmp_path):
+    """The shipped network: >= 99.9 % of geofence pixels and log eta within 1e-3 on
+    synthetic approach pairs (the 64-test-pair figure: `bittc eval --backend onnxruntime`)."""
+    export_onnx(DEFAULT_WEIGHTS, tmp_path / "onnx")
+    ref = make_estimator("bittc", device="cpu")
+    ort = make_estimator("bittc", weights=str(DEFAULT_WEIGHTS), backend="onnxruntime", onnx=str(tmp_path / "onnx"))
+    thr = [0.5, 1.0, 2.0, 4.0]
+    agr = Agreement(thr)
+    for seed in range(4):
+        a, b = _zoom_pair(96, 288, seed)
+        agr.add(ort.geofence(a, b, thr), ref.geofence(a, b, thr), ort.motion_in_depth(a, b), ref.motion_in_depth(a, b))
+    r = agr.result()
+    assert r["geofence_pixels_agreeing_min"] >= 0.999
+    assert r["log_eta_abs_diff_p999"] <= 1e-3
