@@ -89,11 +89,12 @@ def load_checkpoint(path: str | os.PathLike, map_location: str | torch.device = 
         raise CheckpointError(f"no checkpoint at {str(path)!r}{hint}")
     try:
         ckpt = torch.load(path, map_location=map_location, weights_only=True)
-    except Exception as err:  # pickle/zip errors of a truncated or foreign file
-        raise CheckpointError(f"cannot read checkpoint {str(path)!r}: corrupt or not a "
-                              f"bittc checkpoint ({type(err).__name__}: {err})") from None
+    except Exception:  # pickle/zip errors of a truncated or foreign file
+        # (torch's own message advises loading with weights_only=False: never for a checkpoint)
+        raise CheckpointError(f"{str(path)!r} is not a bittc checkpoint (unreadable: corrupt, truncated "
+                              "or another kind of file)") from None
     if not isinstance(ckpt, dict) or any(k not in ckpt for k in REQUIRED_KEYS):
-        raise CheckpointError(f"checkpoint {str(path)!r} lacks the keys {list(REQUIRED_KEYS)}")
+        raise CheckpointError(f"{str(path)!r} is not a bittc checkpoint (it lacks the keys {list(REQUIRED_KEYS)})")
     try:
         ckpt["model_config"] = ModelConfig.from_dict(ckpt["config"])
     except (TypeError, ValueError) as err:

@@ -12,9 +12,9 @@ eta_i = tau_i / (tau_i + dt_s).
   pooled over all such pixels of the data set.
 * error_rate: per threshold tau in ``ERROR_RATE_TAUS_S``, the share of valid pixels whose
   class is wrong, pooled over the data set; keyed by f"{tau:g}" ("1", "2", "5").
-* actor_iou: like miou but only over valid pixels of moving actors (instance > 0), at
-  tau = 1 and 2 s, with intersections and unions pooled over the data set (actors are
-  often absent from an image) and averaged over the two classes.
+* actor_iou: like miou but only over valid pixels of vehicles (actors, instance > 0),
+  moving or not, at tau = 1 and 2 s, with intersections and unions pooled over the data
+  set (actors are often absent from an image) and averaged over the two classes.
 * breakdown (where the errors are): the mIoU per threshold; the (image, threshold)
   pairs of the mIoU grouped by the share of valid pixels inside the geofence
   (``INSIDE_SHARE_EDGES``), with their mean two-class IoU and their mean inside-class IoU

@@ -9,7 +9,7 @@
 # schedule from the previous run's best weights; the third and fourth add a Lovasz surrogate
 # of the per-image two-class IoU to the BCE), all on bittc_v1 (smooth ground); a fifth and a
 # sixth binary run on bittc_v2 (the same scenes with the detailed ground; the sixth at half the
-# learning rate, moving-actor pixels weighted 2 in the loss), then the continuous stage with the
+# learning rate, vehicle pixels, moving or not, weighted 2 in the loss), then the continuous stage with the
 # binary network frozen (--freeze-binary: only the continuous refinement learns, SmoothL1 on the refined log eta;
 # end to end, BCE 0.1 + SmoothL1 0.9 as in the paper, this small model lost 0.05 mIoU);
 # then a seventh binary run from that checkpoint (the sixth's settings, 4,000 steps, seed 9)

@@ -22,9 +22,11 @@ A scenario file (YAML) describes one family of runs in Euro NCAP terms::
         lane_change: {start_s: 1, duration_s: 2, to_lane: 0}
     traffic: 0                       # background IDM vehicles in the other lanes
 
-Any scalar field given as a list expands into the cartesian product of runs. In
-``case_name`` a swept field is referenced by its flattened name: ``ego_speed_kph``,
-``actor0_overlap_pct``, ``actor0_headway_m``...
+Sweeps: a list expands into the cartesian product of runs only in the fields of ``ego``
+and of each entry of ``actors`` (``lane_change`` too: a list of lane changes, ``null``
+for none); a list anywhere else (the top-level fields, ``road``, inside
+``lane_change``) is a ConfigError. In ``case_name`` a swept field is referenced by its
+flattened name: ``ego_speed_kph``, ``actor0_overlap_pct``, ``actor0_headway_m``...
 Headway: Euro NCAP runs start at 5 s time headway, i.e. a gap of 5 s at the ego's speed.
 The gap is bumper to bumper along the road.
 """
@@ -105,6 +107,28 @@ def _fail(src: str, key: str, value: Any, why: str) -> ConfigError:
     return ConfigError(f"{src}: {key} = {value!r}: {why}")
 
 
+def _check_not_list(src: str, key: str, v: Any) -> None:
+    if isinstance(v, list):
+        raise _fail(src, key, v, "a list expands into a sweep only in the fields of ego and of each actor")
+
+
+def _check_unswept(src: str, raw: dict) -> None:
+    """No list outside the fields of ``ego`` and of each actor (where lists are sweeps)."""
+    for k, v in raw.items():
+        if k not in ("ego", "actors"):
+            _check_not_list(src, k, v)
+    if isinstance(raw.get("road"), dict):
+        for k, v in raw["road"].items():
+            _check_not_list(src, f"road.{k}", v)
+
+
+def _check_name(src: str, key: str, v: Any, template: bool = False) -> str:
+    """A family name (no spaces) or a ``case_name`` template: a non-empty string."""
+    if not isinstance(v, str) or not v or (not template and any(ch.isspace() for ch in v)):
+        raise _fail(src, key, v, "must be a non-empty string" + ("" if template else " without spaces"))
+    return v
+
+
 def _check_keys(src: str, where: str, d: Any, allowed: set[str]) -> None:
     if not isinstance(d, dict):
         raise _fail(src, where, d, "must be a mapping")
@@ -181,6 +205,8 @@ def expand(raw: Any, src: str) -> list[ScenarioCase]:
     for req in ("name", "threat", "ego"):
         if req not in raw:
             raise ConfigError(f"{src}: missing required key {req!r}")
+    _check_unswept(src, raw)
+    _check_name(src, "name", raw["name"])
     _check_keys(src, "ego", raw["ego"], _EGO_KEYS)
     actors = raw.get("actors") or []
     if not isinstance(actors, list):
@@ -194,6 +220,7 @@ def expand(raw: Any, src: str) -> list[ScenarioCase]:
     template = raw.get("case_name")
     if template is None:
         template = raw["name"] + "".join(f"-{{{n}}}" for n in names)
+    _check_name(src, "case_name", template, template=True)
     cases = []
     for combo in itertools.product(*values) if names else [()]:
         r = {**raw, "ego": dict(raw["ego"]), "actors": [dict(a) for a in actors]}
@@ -203,6 +230,8 @@ def expand(raw: Any, src: str) -> list[ScenarioCase]:
             case_name = template.format(**{n: _fmt(v) for n, v in zip(names, combo)})
         except (KeyError, IndexError) as e:
             raise _fail(src, "case_name", template, f"refers to {e} which is not a swept field (swept: {names})") from None
+        except (ValueError, AttributeError) as e:
+            raise _fail(src, "case_name", template, f"is not a valid name template ({e})") from None
         cases.append(_resolve(r, case_name, src))
     seen = set()
     for c in cases:
@@ -214,8 +243,6 @@ def expand(raw: Any, src: str) -> list[ScenarioCase]:
 
 def _resolve(r: dict, case_name: str, src: str) -> ScenarioCase:
     name = r["name"]
-    if not isinstance(name, str) or not name or any(ch.isspace() for ch in name):
-        raise _fail(src, "name", name, "must be a non-empty string without spaces")
     if not isinstance(r["threat"], bool):
         raise _fail(src, "threat", r["threat"], "must be true or false")
     duration = _number(src, "duration_s", r.get("duration_s", 12.0), 0.5, 120.0)
@@ -264,6 +291,8 @@ def _resolve(r: dict, case_name: str, src: str) -> ScenarioCase:
         lc = None
         if lc_raw is not None:
             _check_keys(src, f"{k}.lane_change", lc_raw, _LC_KEYS)
+            for lk, lv in lc_raw.items():
+                _check_not_list(src, f"{k}.lane_change.{lk}", lv)
             lc = LaneChange(
                 start_s=_number(src, f"{k}.lane_change.start_s", lc_raw.get("start_s", 0.0), 0.0, duration),
                 duration_s=_number(src, f"{k}.lane_change.duration_s", lc_raw.get("duration_s", 2.0), 0.5, 10.0),

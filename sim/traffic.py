@@ -154,13 +154,17 @@ class TrafficVehicle(_Sized, IDMVehicle):
     def __init__(self, road: Road, x_m: float, y_m: float, speed_mps: float, length_m: float, width_m: float):
         super().__init__(road, np.array([x_m, -y_m], float), 0.0, speed_mps, target_speed=speed_mps, enable_lane_change=False)
         self.set_size(length_m, width_m)
+        self.current_accel_mps2 = 0.0  # [m/s^2] along the heading, as applied in the last step
 
     def command(self, t_s: float, dt_s: float) -> None:
         self.act()
         a = float(self.action["acceleration"])
-        if self.speed + a * dt_s < 0.0:
-            self.action["acceleration"] = -self.speed / dt_s
-        self.current_accel_mps2 = float(self.action["acceleration"])
+        if self.speed + a * dt_s < 0.0:  # stop at standstill instead of reversing
+            a = -self.speed / dt_s
+        if self.speed + a * dt_s > self.MAX_SPEED:
+            a = (self.MAX_SPEED - self.speed) / dt_s
+        self.action["acceleration"] = a
+        self.current_accel_mps2 = a
 
 
 def _lateral_steering(v: Vehicle, y_ref_m: float, dy_ref_mps: float) -> float:

@@ -259,7 +259,8 @@ class World:
 
     # ------------------------------------------------------------------ rendering
     def render(self, cam_T_world: np.ndarray, with_rgb: bool = True) -> Render:
-        """Render the scene from an OpenCV camera pose ``cam_T_world`` (4x4)."""
+        """Render the scene from an OpenCV camera pose ``cam_T_world`` (4x4); with
+        ``with_rgb=False`` the render's ``rgb`` is None (depth and instances only)."""
         cam = self.camera
         view = view_matrix_gl(cam_T_world)
         s = cam.supersample
@@ -273,8 +274,8 @@ class World:
                 hi, _, hseg = self._raw(cam.width_px * s, cam.height_px * s, view, cam.projection_matrix_gl(s), p.ER_NO_SEGMENTATION_MASK)
                 rgb = hi.reshape(cam.height_px, s, cam.width_px, s, 3).mean(axis=(1, 3)).round().astype(np.uint8)
             _, depth_buf, seg = self._raw(cam.width_px, cam.height_px, view, cam.projection_matrix_gl(1), flags)
-            if not with_rgb:
-                rgb = None
+        if not with_rgb:
+            rgb = None
         obj = np.where(seg >= 0, seg & 0xFFFFFF, -1)
         lut = self.instance_lut
         instance = np.where(obj >= 0, lut[np.clip(obj, 0, len(lut) - 1)], -1).astype(np.int32)

@@ -46,3 +46,15 @@ def test_two_worlds_in_one_process_are_independent():
     finally:
         a.close()
         b.close()
+
+
+@pytest.mark.parametrize("supersample", [1, 2])
+def test_render_without_rgb_gives_no_image_and_the_same_maps(supersample):
+    cam = CameraConfig(height_px=24, width_px=72, supersample=supersample)
+    w = World(cam, RoadConfig(x_end_m=100, buildings=False), seed=0)
+    try:
+        full, maps_only = w.render(cam_T_ego(cam)), w.render(cam_T_ego(cam), with_rgb=False)
+        assert full.rgb is not None and maps_only.rgb is None
+        assert np.array_equal(full.depth_m, maps_only.depth_m) and np.array_equal(full.instance, maps_only.instance)
+    finally:
+        w.close()

@@ -202,3 +202,16 @@ def test_braking_cases_ahead(tmp_path):
     items = [TTCDataset(tmp_path / "a", "train")[i] for i in range(6)]
     assert sum(bool(it["inpath"].any()) for it in items) >= 3  # the targets ahead are in the path
     assert all(not (it["inpath"] & (it["instance"] <= 0)).any() for it in items)  # vehicles only
+
+
+def test_steady_rate_is_reported_only_over_a_long_enough_window(tmp_path):
+    from bittc_core.data.generate import steady_rate
+
+    # 24 samples on 2 workers in chunks of 4: after each worker's first chunk the other
+    # 16 results arrive in one burst, a window of almost no time
+    assert steady_rate([2.0 + 1e-6 * i for i in range(24)], skip=8) is None
+    assert steady_rate([1.0 + 0.05 * i for i in range(8)] + [3.0 + 0.05 * i for i in range(12)], skip=8) is None
+    # 200 samples at a steady 20 samples/s
+    assert steady_rate([1.0 + 0.05 * i for i in range(200)], skip=8) == pytest.approx(20.0)
+    run = generate(tmp_path / "a", SMALL, "train", 6, workers=1, backend="local", progress=False)
+    assert run["written"] == 6 and "steady_samples_per_s" in run and run["steady_samples_per_s"] is None

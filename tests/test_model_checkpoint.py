@@ -3,6 +3,7 @@ across growth (the global-context block, growth blocks), the release copy."""
 
 import dataclasses
 import os
+import random
 import stat
 
 import pytest
@@ -164,3 +165,18 @@ def test_release_payload_drops_training_state(tmp_path):
     assert sorted(release) == sorted(REQUIRED_KEYS)
     save_checkpoint(tmp_path / "ship.pt", release)
     assert "train_state" not in load_checkpoint(tmp_path / "ship.pt", expected_config="tiny")
+
+
+def test_a_foreign_file_is_named_as_not_a_bittc_checkpoint_without_torch_advice(tmp_path):
+    junk = tmp_path / "junk.pt"
+    junk.write_bytes(random.Random(0).randbytes(4096))
+    module = tmp_path / "module.pt"
+    torch.save(torch.nn.Linear(2, 2), module)  # a valid torch file, not a weights-only payload
+    tensors = tmp_path / "tensors.pt"
+    torch.save({"weights": torch.zeros(2)}, tensors)  # a weights-only file without the bittc keys
+    for path in (junk, module, tensors):
+        with pytest.raises(CheckpointError) as e:
+            load_checkpoint(path)
+        msg = str(e.value)
+        assert f"{str(path)!r} is not a bittc checkpoint" in msg, msg
+        assert "weights_only" not in msg and "torch.load" not in msg and "safe_globals" not in msg, msg

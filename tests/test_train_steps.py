@@ -106,6 +106,73 @@ def test_resume_drops_the_log_rows_it_will_redo(tmp_path):
     assert [r["step"] for r in csv.DictReader(open(tr.paths.csv)) if r["stage"] == "binary"] == ["4", "5", "6"]
 
 
+def _record_batches(tr, seen: list, interrupt_at: int | None = None) -> None:
+    """Keep a copy of every batch ``tr`` trains on; raise KeyboardInterrupt in step ``interrupt_at``."""
+    losses = tr.losses
+
+    def spy(batch):
+        seen.append(batch["image_prev"].clone())
+        if len(seen) == interrupt_at:
+            raise KeyboardInterrupt
+        return losses(batch)
+
+    tr.losses = spy
+
+
+def test_resume_continues_the_interrupted_epoch_in_the_same_order(tmp_path):
+    # 16 pairs in batches of 4: 4 steps an epoch; checkpoints every 3 steps
+    def trainer(folder):
+        tr = make_trainer(tmp_path / folder, "binary", steps=8)
+        tr.cfg = dataclasses.replace(tr.cfg, val_every=3)
+        return tr
+
+    full, seen_full = trainer("full"), []
+    _record_batches(full, seen_full)
+    full.run()
+    cut, seen_cut = trainer("cut"), []
+    _record_batches(cut, seen_cut, interrupt_at=7)
+    with pytest.raises(KeyboardInterrupt):  # killed in step 7, after the checkpoint of step 6
+        cut.run()
+    resumed, seen_resumed = trainer("cut"), []
+    resumed.resume()
+    assert resumed.step == 6  # mid-way through the second epoch
+    _record_batches(resumed, seen_resumed)
+    resumed.run()
+    assert len(seen_full) == 8 and len(seen_resumed) == 2
+    for a, b in zip(seen_cut[:6] + seen_resumed, seen_full, strict=True):
+        assert torch.equal(a, b)
+    assert not torch.equal(torch.stack(seen_full[:4]), torch.stack(seen_full[4:8]))  # epochs are reshuffled
+
+
+def test_seconds_per_step_leave_validation_out(tmp_path, monkeypatch):
+    import csv
+    import time
+
+    import bittc_core.train.loop as loop_mod
+
+    pause_s = 0.6
+    real = loop_mod.validate
+
+    def slow_validate(*args, **kw):
+        time.sleep(pause_s)
+        return real(*args, **kw)
+
+    monkeypatch.setattr(loop_mod, "validate", slow_validate)
+    tr = make_trainer(tmp_path, "binary", steps=6)
+    tr.cfg = dataclasses.replace(tr.cfg, val_every=3, log_every=1)
+    tr.run()
+    per_step = {int(r["step"]): float(r["s_per_step"]) for r in csv.DictReader(open(tr.paths.csv))}
+    assert sorted(per_step) == [1, 2, 3, 4, 5, 6]
+    assert max(per_step.values()) < pause_s, per_step  # step 4 follows the validation of step 3
+
+
+def test_actor_weight_help_names_every_vehicle_pixel_not_only_moving_ones():
+    train = train_cmd.add_parser(argparse.ArgumentParser().add_subparsers())
+    help_text = next(a.help for a in train._actions if "--actor-weight" in a.option_strings)
+    # the weight applies to instance > 0: parked and stationary vehicles too
+    assert "moving-actor" not in help_text and "moving or not" in help_text, help_text
+
+
 def test_weighted_bce():
     logits = torch.tensor([[[2.0, -1.0, 0.5]]])
     labels = torch.tensor([[[1.0, 1.0, 0.0]]])

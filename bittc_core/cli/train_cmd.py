@@ -45,7 +45,8 @@ def add_parser(sub) -> argparse.ArgumentParser:
     add_device_flag(p)
     p.add_argument("--stage", default="binary", help="flow, binary, continuous or all (default binary)")
     p.add_argument("--actor-weight", type=float, default=1.0,
-                   help="binary stage: loss weight of moving-actor pixels, static pixels 1 (default 1)")
+                   help="binary stage: loss weight of vehicle (actor) pixels, moving or not; "
+                        "scenery pixels 1 (default 1)")
     p.add_argument("--inpath-weight", type=float, default=1.0,
                    help="binary stage: loss weight of in-path vehicle pixels (within 1.5 m of the camera's axis, "
                         "nearer than 80 m), instead of --actor-weight there (default 1)")

@@ -35,6 +35,10 @@ MAX_ATTEMPTS = 3  # tries per sample before the run fails
 GC_THRESHOLDS = (20_000, 50, 100)
 LOCAL_CHUNK = 4  # samples per task sent to a local worker process
 RAY_CHUNK = 8  # samples per Ray task
+# the run statistics' steady_samples_per_s is measured over at least this many completions
+# (and at least one more chunk per worker) spanning at least this long; else it is None
+STEADY_MIN_SAMPLES = 20
+STEADY_MIN_S = 2.0  # [s]
 
 
 @dataclass(frozen=True)
@@ -186,7 +190,13 @@ def pending_indices(split_dir: Path, n: int, clip_length: int) -> tuple[list[int
 
 def generate(out: Path, cfg: GenerationConfig, split: str, n_samples: int, workers: int, backend: str,
              ray_address: str | None = None, progress: bool = True) -> dict:  # fmt: skip
-    """Make samples 0..n-1 of ``split`` in ``out``; returns run statistics."""
+    """Make samples 0..n-1 of ``split`` in ``out``; returns run statistics.
+
+    ``steady_samples_per_s`` (present when something was made): the rate after each
+    worker's first chunk (``steady_rate``), or None when that window is too short to
+    measure (fewer than ``STEADY_MIN_SAMPLES`` completions or one chunk per worker, or
+    under ``STEADY_MIN_S``); ``samples_per_s`` counts the whole run, start-up included.
+    """
     if split not in SPLITS:
         raise CliError(f"--split {split!r}: must be one of {', '.join(SPLITS)}")
     if not 0 < n_samples <= MAX_SAMPLES_PER_SPLIT:
@@ -213,8 +223,8 @@ def generate(out: Path, cfg: GenerationConfig, split: str, n_samples: int, worke
         tally = runner(cfg, split_dir, split, todo, workers, ray_address, progress)
         run["written"], run["failed"] = tally.written, sorted(tally.failed)
         chunk = RAY_CHUNK if backend == "ray" else LOCAL_CHUNK
-        rate = steady_rate(tally.done_at_s, skip=chunk * workers)
-        run["steady_samples_per_s"] = round(rate, 3) if rate else None
+        rate = steady_rate(tally.done_at_s, skip=chunk * workers, min_samples=max(STEADY_MIN_SAMPLES, chunk * workers))
+        run["steady_samples_per_s"] = round(rate, 3) if rate is not None else None
     run["seconds"] = round(time.perf_counter() - t0, 2)
     run["samples_per_s"] = round(run["written"] / run["seconds"], 3) if run["written"] else None
     from bittc_core.data.card import rebuild_manifest_and_card
@@ -265,12 +275,20 @@ class _Tally:
         return retry
 
 
-def steady_rate(done_at_s: list[float], skip: int) -> float | None:
+def steady_rate(done_at_s: list[float], skip: int, min_samples: int = STEADY_MIN_SAMPLES,
+                min_s: float = STEADY_MIN_S) -> float | None:
     """Samples/s between the ``skip``-th and the last completion: the throughput once
-    the workers are up (process start, imports and the first world are left out)."""
-    if len(done_at_s) < skip + 2:
+    the workers are up (process start, imports and the first world are left out).
+
+    None unless that window holds at least ``min_samples`` completions after the
+    ``skip``-th and spans at least ``min_s`` seconds: results arrive a chunk at a time,
+    so a shorter window measures the burst, not the rate."""
+    if len(done_at_s) < skip + 1 + max(min_samples, 1):
         return None
-    return (len(done_at_s) - 1 - skip) / (done_at_s[-1] - done_at_s[skip])
+    span_s = done_at_s[-1] - done_at_s[skip]
+    if span_s <= 0.0 or span_s < min_s:
+        return None
+    return (len(done_at_s) - 1 - skip) / span_s
 
 
 def _run_local(cfg, split_dir, split, todo, workers, _addr, progress):

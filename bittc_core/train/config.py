@@ -25,7 +25,7 @@ class TrainConfig:
     # binary stage: this share of each pair's thresholds at the eta of a random valid pixel
     # (jittered; ``train.targets.sample_eta_at_pixels``), the rest uniform
     pixel_threshold_share: float = 0.0
-    actor_weight: float = 1.0  # binary TTC loss weight of moving-actor pixels (instance > 0), static 1
+    actor_weight: float = 1.0  # binary TTC loss weight of vehicle pixels, moving or not (instance > 0); scenery 1
     # binary TTC loss weight of in-path vehicle pixels (``data.dataset.INPATH_HALF_WIDTH_M``),
     # instead of actor_weight there: what a braking controller reads
     inpath_weight: float = 1.0

@@ -1,7 +1,8 @@
 """The training loop of one stage (paper Sec. 4.4 and Supp. B).
 
 Stages: ``flow``: binary-flow pre-training, TTC head unsupervised; ``binary``: binary
-TTC (several eta thresholds per pair, moving-actor pixels weighted ``actor_weight``; BCE,
+TTC (several eta thresholds per pair, vehicle (actor) pixels, moving or not, weighted
+``actor_weight``; BCE,
 plus ``lovasz_weight`` x a Lovasz surrogate of the per-map two-class IoU, plus
 ``distill_weight`` x BCE towards a frozen teacher's flip-averaged maps, actor pixels
 weighted alike) + binary flow
@@ -12,7 +13,8 @@ refined log eta (0.9), still with the flow auxiliary (0.8 / 0.2); with
 AdamW, linear warm-up then cosine decay, gradient clipping; validation every
 ``val_every`` steps keeps the best checkpoint by val mIoU (by val MiD with
 ``freeze_binary``) at ``paths.best``; a
-resumable checkpoint (optimizer, step, RNG states) goes to ``paths.last``, with
+resumable checkpoint (optimizer, step, RNG states, the position in the epoch's data
+order) goes to ``paths.last``, with
 ``keep_checkpoints`` the weights of every validation step to ``paths.snapshot``; a CSV
 row every ``log_every`` steps to ``paths.csv``.
 """
@@ -27,8 +29,9 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
 import torch
-from torch.utils.data import DataLoader, Dataset
+from torch.utils.data import DataLoader, Dataset, Sampler
 from tqdm import tqdm
 
 from bittc_core.atomic import write_text_atomic
@@ -68,14 +71,46 @@ class RunPaths:
         return stem.with_name(f"{stem.name}.{stage}.step{step:06d}.pt")
 
 
-def _forever(loader: DataLoader, epoch: int = 0):
-    """Endless batches from ``epoch`` on; datasets with ``set_epoch`` (TTCDataset) redraw
-    augmentations per epoch (a resumed run continues at its epoch)."""
+class EpochSampler(Sampler[int]):
+    """The training order: each epoch a permutation of the ``n`` pairs drawn from
+    (``seed``, epoch) alone, so a resumed run can continue an epoch where it stopped.
+    ``set_epoch(epoch, start)``: the next pass yields that epoch's order from its
+    ``start``-th index on."""
+
+    def __init__(self, n: int, seed: int) -> None:
+        self.n, self.seed = n, seed
+        self.epoch, self.start = 0, 0
+
+    def set_epoch(self, epoch: int, start: int = 0) -> None:
+        self.epoch, self.start = epoch, start
+
+    def order(self, epoch: int) -> torch.Tensor:
+        entropy = [self.seed & 0xFFFF_FFFF_FFFF_FFFF, epoch, 0x0DA7A]  # 0x0DA7A: this stream's tag
+        gen = torch.Generator().manual_seed(int(np.random.SeedSequence(entropy).generate_state(1, np.uint64)[0]))
+        return torch.randperm(self.n, generator=gen)
+
+    def __iter__(self):
+        return iter(self.order(self.epoch)[self.start:].tolist())
+
+    def __len__(self) -> int:
+        return self.n
+
+
+def _forever(loader: DataLoader, epoch: int = 0, position: int = 0):
+    """Endless ``(batch, epoch, position)`` from index ``position`` of ``epoch``'s order
+    (``EpochSampler``) on; the returned (epoch, position) is where the next batch starts,
+    what a checkpoint saved after this batch resumes at. Datasets with ``set_epoch``
+    (TTCDataset) redraw augmentations per epoch."""
+    n, b = len(loader.sampler), loader.batch_size
     while True:
         if hasattr(loader.dataset, "set_epoch"):
             loader.dataset.set_epoch(epoch)
-        yield from loader
-        epoch += 1
+        loader.sampler.set_epoch(epoch, position)
+        for batch in loader:
+            position += b
+            # (drop_last: a rest shorter than a batch is dropped, the next batch opens the next epoch)
+            yield (batch, epoch + 1, 0) if position + b > n else (batch, epoch, position)
+        epoch, position = epoch + 1, 0
 
 
 #: what ``freeze_binary`` freezes (their batch-norm statistics too): the binary network
@@ -128,10 +163,12 @@ class Trainer:
         self.meta = dict(meta or {})
         self.val_set = val_set
         self.gen = torch.Generator().manual_seed(cfg.seed)  # hypotheses
-        self.loader_gen = torch.Generator().manual_seed(cfg.seed + 1)  # data order
-        self.loader = DataLoader(train_set, batch_size=cfg.batch_size, shuffle=True,
+        self.loader_gen = torch.Generator().manual_seed(cfg.seed + 1)  # the loader workers' base seeds
+        self.loader = DataLoader(train_set, batch_size=cfg.batch_size, sampler=EpochSampler(len(train_set), cfg.seed),
                                  drop_last=True, num_workers=cfg.num_workers,
                                  generator=self.loader_gen)
+        # where the next batch starts: the epoch, and the index in that epoch's order
+        self.data_epoch, self.data_position = 0, 0
         for module in self.frozen_modules():
             module.requires_grad_(False)
         self.opt = torch.optim.AdamW(param_groups(net, cfg.lr_mults, frozen_prefixes(cfg)), lr=cfg.lr,
@@ -238,7 +275,8 @@ class Trainer:
     def save_last(self) -> None:
         state = {"optimizer": self.opt.state_dict(), "step": self.step, "best": self.best,
                  "stage": self.cfg.stage, "gen": self.gen.get_state(),
-                 "loader_gen": self.loader_gen.get_state(), "torch_rng": torch.get_rng_state()}
+                 "loader_gen": self.loader_gen.get_state(), "torch_rng": torch.get_rng_state(),
+                 "data_epoch": self.data_epoch, "data_position": self.data_position}
         save_checkpoint(self.paths.last, make_payload(self.net, self.config_name, self._meta(), state))
 
     def resume(self) -> None:
@@ -260,6 +298,11 @@ class Trainer:
         self.gen.set_state(state["gen"])
         self.loader_gen.set_state(state["loader_gen"])
         torch.set_rng_state(state["torch_rng"])
+        if "data_epoch" in state:
+            self.data_epoch, self.data_position = int(state["data_epoch"]), int(state["data_position"])
+        else:  # saved before the position was: where this step falls in the epochs
+            per_epoch = max(len(self.loader), 1)
+            self.data_epoch, self.data_position = self.step // per_epoch, self.step % per_epoch * self.cfg.batch_size
         self._trim_log()
 
     def _trim_log(self) -> None:
@@ -289,12 +332,16 @@ class Trainer:
     def run(self) -> dict:
         c = self.cfg
         self._train_mode()
-        batches = _forever(self.loader, epoch=self.step // max(len(self.loader), 1))
+        batches = _forever(self.loader, self.data_epoch, self.data_position)
         bar = tqdm(total=c.steps, initial=self.step, desc=f"train {c.stage}", mininterval=1.0)
         last_val: dict = {}
-        t0 = time.perf_counter()
+        # s_per_step: the mean time of the training steps since the last row (loading the
+        # batch, forward, backward, update); validation, checkpoints and logging left out
+        train_s, timed_steps = 0.0, 0
         while self.step < c.steps:
-            batch = {k: v.to(self.device, non_blocking=True) for k, v in next(batches).items()}
+            t0 = time.perf_counter()
+            batch, self.data_epoch, self.data_position = next(batches)
+            batch = {k: v.to(self.device, non_blocking=True) for k, v in batch.items()}
             lr = self.lr_at(self.step)
             for group in self.opt.param_groups:
                 group["lr"] = lr * group["lr_mult"]
@@ -307,10 +354,12 @@ class Trainer:
             self.step += 1
             bar.update(1)
             bar.set_postfix(loss=f"{parts['loss'].item():.4f}")
+            train_s += time.perf_counter() - t0
+            timed_steps += 1
             row = None
             if self.step % c.log_every == 0 or self.step == c.steps:
-                dt = (time.perf_counter() - t0) / c.log_every
-                t0 = time.perf_counter()
+                dt = train_s / timed_steps
+                train_s, timed_steps = 0.0, 0
                 row = {"step": self.step, "stage": c.stage, "lr": f"{lr:.3g}", "grad_norm": f"{grad_norm:.4g}",
                        "s_per_step": f"{dt:.3f}", **{f"loss_{k}" if k != "loss" else k: f"{v.item():.5f}"
                                                       for k, v in parts.items()}}
