@@ -17,7 +17,7 @@ from pathlib import Path
 import torch
 
 from bittc_core.atomic import open_temp_beside
-from bittc_core.errors import CliError
+from bittc_core.errors import ConfigError
 from bittc_core.model import CONFIGS, BinaryTTCNet, ModelConfig, get_config
 from bittc_core.model.config import GROWTH_COUNTS, GROWTH_FLAGS, GROWTH_SWITCHES
 
@@ -31,7 +31,7 @@ REQUIRED_KEYS = ("config", "config_name", "state_dict", "train_meta")
 SHIPPED_RELEASE = "bittc-2026.11"
 
 
-class CheckpointError(CliError, ValueError):
+class CheckpointError(ConfigError):
     """A checkpoint that is missing, corrupt, or of another config."""
 
 
@@ -141,7 +141,7 @@ def init_network(path: str | os.PathLike, config_name: str) -> BinaryTTCNet:
         _check_config(ckpt, path, config_name)
         return build_network(ckpt)
     if CONFIGS.get(name) != source or not grows_into(source, target):
-        raise CheckpointError(f"--init {str(path)!r}: its config ({name!r}) is neither "
+        raise CheckpointError(f"initial checkpoint {str(path)!r}: its config ({name!r}) is neither "
                               f"{config_name!r} nor a config {config_name!r} grows from "
                               "(the same sizes with fewer growth blocks, no global-context block or no "
                               "correlation volume)")
@@ -150,7 +150,7 @@ def init_network(path: str | os.PathLike, config_name: str) -> BinaryTTCNet:
     missing, unexpected = net.load_state_dict(ckpt["state_dict"], strict=False)
     # (batch norm fills in a missing num_batches_tracked itself, so it is never missing)
     if not set(missing) <= added or unexpected:
-        raise CheckpointError(f"--init {str(path)!r}: weights do not fit config {config_name!r} "
+        raise CheckpointError(f"initial checkpoint {str(path)!r}: weights do not fit config {config_name!r} "
                               f"(missing {sorted(set(missing) - added)}, unexpected {unexpected})")
     return net
 
@@ -173,7 +173,7 @@ def pick_device(name: str = "auto") -> torch.device:
     if name == "auto":
         return torch.device("cuda" if torch.cuda.is_available() else "cpu")
     if name == "cuda" and not torch.cuda.is_available():
-        raise CliError("--device cuda: no CUDA device is available")
+        raise ConfigError("device 'cuda': no CUDA device is available")
     if name not in ("cpu", "cuda"):
-        raise CliError(f"device {name!r}: expected auto, cpu or cuda")
+        raise ConfigError(f"device {name!r}: expected auto, cpu or cuda")
     return torch.device(name)

@@ -37,7 +37,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from bittc_core.ttc import tau_to_eta
+from bittc_core.ttc import eta_to_tau, tau_to_eta
 
 MIOU_TAU_RANGE_S = (0.2, 2.0)
 MIOU_LEVELS = 10
@@ -57,8 +57,7 @@ FORGIVEN_MARGINS = (0.01, 0.02, 0.04)  # [log eta] margins of the breakdown's fo
 def miou_thresholds_s(dt_s: float, levels: int = MIOU_LEVELS) -> np.ndarray:
     """Thresholds [s] spanning MIOU_TAU_RANGE_S uniformly in eta."""
     lo, hi = (tau_to_eta(t, dt_s) for t in MIOU_TAU_RANGE_S)
-    eta = np.linspace(lo, hi, levels)
-    return dt_s * eta / (1.0 - eta)
+    return eta_to_tau(np.linspace(lo, hi, levels), dt_s)
 
 
 def inside_geofence(eta: np.ndarray, eta_i: float) -> np.ndarray:

@@ -11,18 +11,33 @@ A geofence of threshold tau_i > 0 is the set 0 < tau <= tau_i, i.e. eta <= eta_i
 
 from __future__ import annotations
 
+import math
+import sys
+
 import numpy as np
-import torch
+
+
+def _is_tensor(x) -> bool:
+    """A torch tensor (without importing torch: whoever made one has imported it)."""
+    torch = sys.modules.get("torch")
+    return torch is not None and isinstance(x, torch.Tensor)
 
 
 def tau_to_eta(tau_s, dt_s: float):
-    """eta_i = tau / (tau + dt); works on floats, numpy arrays and tensors."""
-    return tau_s / (tau_s + dt_s)
+    """eta = tau / (tau + dt), 1 where tau is +-inf; on floats, numpy arrays and tensors."""
+    if _is_tensor(tau_s):
+        torch = sys.modules["torch"]
+        return torch.where(torch.isinf(tau_s), torch.ones_like(tau_s), tau_s / (tau_s + dt_s))
+    if isinstance(tau_s, np.ndarray):
+        with np.errstate(invalid="ignore"):
+            return np.where(np.isinf(tau_s), np.ones_like(tau_s), tau_s / (tau_s + dt_s))
+    return 1.0 if math.isinf(tau_s) else tau_s / (tau_s + dt_s)
 
 
 def eta_to_tau(eta, dt_s: float):
-    """tau = dt * eta / (1 - eta), +inf where eta == 1 (tensor or numpy)."""
-    if isinstance(eta, torch.Tensor):
+    """tau = dt * eta / (1 - eta), +inf where eta == 1 (tensor, or anything numpy takes: float64)."""
+    if _is_tensor(eta):
+        torch = sys.modules["torch"]
         denom = 1.0 - eta
         tau = dt_s * eta / denom
         return torch.where(denom == 0, torch.full_like(eta, float("inf")), tau)

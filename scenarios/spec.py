@@ -42,8 +42,8 @@ from typing import Any
 import yaml
 
 from bittc_core.errors import ConfigError
-from sim.scenery import RoadConfig
-from sim.vehicles import VEHICLE_CLASSES
+from scenarios.road import RoadConfig
+from scenarios.vehicle_classes import VEHICLE_CLASSES
 
 
 @dataclass(frozen=True)

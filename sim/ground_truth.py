@@ -5,8 +5,8 @@ Convention:
     t0 = t1 - dt_s. For the 3D point seen at each pixel:
       eta   = Z(t1) / Z(t0)  (motion-in-depth, camera-frame depth of the same point)
       tau_s = dt_s * eta / (1 - eta): time to contact measured from t1, the latest
-              capture time. Approaching: 0 < eta < 1, tau > 0; receding: eta > 1,
-              tau < 0; eta == 1: tau = +inf.
+              capture time (``bittc_core.ttc`` converts). Approaching: 0 < eta < 1,
+              tau > 0; receding: eta > 1, tau < 0; eta == 1: tau = +inf.
       flow_px = (u1 - u0, v1 - v0): where the point is in the latest frame minus where
               it was in the previous one (so x_prev = x_latest - flow).
     ``valid`` is False for sky and for points behind the previous camera.
@@ -21,6 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from bittc_core.ttc import eta_to_tau
 
 ETA_ONE_TOL = 1e-7  # below this |eta - 1| rounds to 1.0 in float32 anyway
 
@@ -35,21 +36,6 @@ class GroundTruth:
     flow_px: np.ndarray  # float32 (u, v) [px]
     instance: np.ndarray  # int32: -1 sky, 0 static, >0 vehicle
     valid: np.ndarray  # bool
-
-
-def tau_from_eta(eta: np.ndarray, dt_s: float) -> np.ndarray:
-    """TTC from the later frame [s]: dt * eta / (1 - eta); +inf where eta == 1."""
-    eta = np.asarray(eta, np.float64)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        tau = np.where(eta == 1.0, np.inf, dt_s * eta / (1.0 - eta))
-    return tau.astype(np.float32)
-
-
-def eta_from_tau(tau_s: np.ndarray, dt_s: float) -> np.ndarray:
-    """Inverse of :func:`tau_from_eta`: eta = tau / (tau + dt)."""
-    tau = np.asarray(tau_s, np.float64)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        return np.where(np.isinf(tau), 1.0, tau / (tau + dt_s))
 
 
 def compute_ground_truth(
@@ -101,7 +87,7 @@ def compute_ground_truth(
     eta[np.abs(eta - 1.0) < ETA_ONE_TOL] = 1.0  # rounding of an exactly co-moving point
     flow = np.stack([u1 - u0, v1 - v0], axis=-1)
     flow[~valid] = 0.0
-    tau = tau_from_eta(eta, dt_s)
+    tau = eta_to_tau(eta, dt_s).astype(np.float32)
     tau[~valid] = np.inf
     return GroundTruth(
         eta=eta.astype(np.float32),

@@ -47,7 +47,7 @@ def read_profile_file(path: str | Path, name: str | None = None) -> DeviceProfil
     """Load and validate ``path``; the profile is named ``name`` (default: the path as given)."""
     p = Path(path)
     if not p.is_file():
-        raise LatencyError(f"profile file {str(path)!r}: no such file (make one with `bittc profile --out FILE`)")
+        raise LatencyError(f"profile file {str(path)!r}: no such file (`bittc profile` makes one)")
     try:
         raw = yaml.safe_load(p.read_text())
     except (yaml.YAMLError, UnicodeDecodeError) as e:

@@ -1,5 +1,9 @@
 """Static scenery: textured road with lane markings, roadside structure at all depths.
 
+``build_scenery`` returns the scenery as data (``Scenery``: textures by name, shapes by
+material); :meth:`sim.world.World.add_scenery` turns it into PyBullet bodies (this module
+knows no world).
+
 Convention: world frame (z up, x along the road, y left). Lane k (k = 0 is the ego's
 lane, positive k to the left) has its centre at y = k * lane_width_m. Everything here is
 static, so its motion between frames is the identity (see :mod:`sim.ground_truth`).
@@ -7,52 +11,12 @@ static, so its motion between frames is the identity (see :mod:`sim.ground_truth
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from dataclasses import dataclass, field
 
 import numpy as np
 
+from scenarios.road import RoadConfig  # noqa: F401  (re-exported: the world's callers import it here)
 from sim.textures import VARIANTS
-
-if TYPE_CHECKING:  # pragma: no cover
-    from sim.world import World
-
-
-@dataclass(frozen=True)
-class RoadConfig:
-    """Straight road layout [m]."""
-
-    lanes_left: int = 1  # lanes left of the ego's lane
-    lanes_right: int = 1  # lanes right of the ego's lane
-    lane_width_m: float = 3.5
-    x_start_m: float = -60.0
-    x_end_m: float = 600.0
-    segment_m: float = 20.0  # road/barrier tile length (keeps texture scale sane)
-    roadside_spacing_m: float = 25.0  # mean spacing of poles/trees/buildings per side
-    barrier: bool = True
-    buildings: bool = True
-    markings_max_x_m: float | None = None  # no dashed markings beyond this x [m] (None: whole road)
-
-    def __post_init__(self) -> None:
-        if self.lanes_left < 0 or self.lanes_right < 0 or self.lanes_left + self.lanes_right > 6:
-            raise ValueError(f"RoadConfig lanes_left={self.lanes_left}, lanes_right={self.lanes_right}: need 0..6 in total")
-        if not 2.5 <= self.lane_width_m <= 5.0:
-            raise ValueError(f"RoadConfig.lane_width_m = {self.lane_width_m} outside [2.5, 5.0] m")
-        if not self.x_end_m > self.x_start_m + self.segment_m:
-            raise ValueError(f"RoadConfig x range [{self.x_start_m}, {self.x_end_m}] m is too short")
-
-    @property
-    def y_left_edge_m(self) -> float:
-        return (self.lanes_left + 0.5) * self.lane_width_m
-
-    @property
-    def y_right_edge_m(self) -> float:
-        return -(self.lanes_right + 0.5) * self.lane_width_m
-
-    def lane_center_y_m(self, lane: int) -> float:
-        if not -self.lanes_right <= lane <= self.lanes_left:
-            raise ValueError(f"lane {lane} does not exist (lanes {-self.lanes_right}..{self.lanes_left})")
-        return lane * self.lane_width_m
 
 
 @dataclass(frozen=True)
@@ -72,33 +36,68 @@ class StaticShape:
         return cls("sphere", tuple(map(float, center_m)), (float(radius_m),))
 
 
-class _Materials:
-    """Static shapes grouped by material (texture id, colour), in first-use order."""
+@dataclass(frozen=True)
+class TextureRef:
+    """A texture of the world's bank (``sim.textures.TextureBank``): kind and variant."""
+
+    kind: str
+    variant: int  # in [0, VARIANTS)
+
+
+@dataclass
+class StaticGroup:
+    """Static shapes of one material: a texture (None: plain colour) and a colour."""
+
+    texture: TextureRef | None
+    rgb: tuple[float, ...]
+    shapes: list[StaticShape] = field(default_factory=list)
+
+
+@dataclass
+class Scenery:
+    """Static bodies as data: ``textures`` in the order the scenery asked for them (the
+    world loads them in that order), ``groups`` per material in first-use order."""
+
+    textures: list[TextureRef] = field(default_factory=list)
+    groups: list[StaticGroup] = field(default_factory=list)
+
+
+class _Builder:
+    """Collects texture requests and shapes grouped by material."""
 
     def __init__(self) -> None:
-        self.groups: dict[tuple[int | None, tuple[float, ...]], list[StaticShape]] = {}
+        self.scenery = Scenery()
+        self._groups: dict[tuple[TextureRef | None, tuple[float, ...]], StaticGroup] = {}
 
-    def box(self, center_m, half_extents_m, texture_id: int | None, rgb=(1.0, 1.0, 1.0)) -> None:
-        self.groups.setdefault((texture_id, tuple(rgb)), []).append(StaticShape.box(center_m, half_extents_m))
+    def texture(self, kind: str, variant: int) -> TextureRef:
+        ref = TextureRef(kind, int(variant) % VARIANTS)
+        self.scenery.textures.append(ref)
+        return ref
 
-    def sphere(self, center_m, radius_m: float, texture_id: int | None) -> None:
-        self.groups.setdefault((texture_id, (1.0, 1.0, 1.0)), []).append(StaticShape.sphere(center_m, radius_m))
+    def _group(self, texture: TextureRef | None, rgb) -> StaticGroup:
+        key = (texture, tuple(rgb))
+        if key not in self._groups:
+            self._groups[key] = StaticGroup(texture, key[1])
+            self.scenery.groups.append(self._groups[key])
+        return self._groups[key]
 
-    def add_to(self, world: World) -> None:
-        for (texture_id, rgb), shapes in self.groups.items():
-            world.add_static_shapes(shapes, texture_id, rgb)
+    def box(self, center_m, half_extents_m, texture: TextureRef | None, rgb=(1.0, 1.0, 1.0)) -> None:
+        self._group(texture, rgb).shapes.append(StaticShape.box(center_m, half_extents_m))
+
+    def sphere(self, center_m, radius_m: float, texture: TextureRef | None) -> None:
+        self._group(texture, (1.0, 1.0, 1.0)).shapes.append(StaticShape.sphere(center_m, radius_m))
 
 
-def build_scenery(world: World, road: RoadConfig, rng: np.random.Generator) -> None:
-    """Add the road, markings and roadside objects to ``world`` (static bodies)."""
-    m = _Materials()
+def build_scenery(road: RoadConfig, rng: np.random.Generator) -> Scenery:
+    """The road, markings and roadside objects of ``road`` (static bodies), drawn from ``rng``."""
+    m = _Builder()
     x0, x1 = road.x_start_m, road.x_end_m
     yl, yr = road.y_left_edge_m, road.y_right_edge_m
     road_w = yl - yr
     v = int(rng.integers(VARIANTS))
-    asphalt = [world.texture("asphalt", v + i) for i in range(2)]
-    grass = [world.texture("grass", v)] * 2
-    concrete = world.texture("concrete", v)
+    asphalt = [m.texture("asphalt", v + i) for i in range(2)]
+    grass = [m.texture("grass", v)] * 2
+    concrete = m.texture("concrete", v)
     n_seg = int(np.ceil((x1 - x0) / road.segment_m))
     for i in range(n_seg):
         xc = x0 + (i + 0.5) * road.segment_m
@@ -118,18 +117,18 @@ def build_scenery(world: World, road: RoadConfig, rng: np.random.Generator) -> N
         y = (k + 0.5) * road.lane_width_m
         for xd in np.arange(x0, x1 if road.markings_max_x_m is None else min(x1, road.markings_max_x_m), 12.0):
             m.box((xd + 1.5, y, 0.003), (1.5, 0.075, 0.003), None, white)
-    _roadside(world, m, road, rng)
-    m.add_to(world)
+    _roadside(m, road, rng)
+    return m.scenery
 
 
-def _roadside(world: World, m: _Materials, road: RoadConfig, rng: np.random.Generator) -> None:
+def _roadside(m: _Builder, road: RoadConfig, rng: np.random.Generator) -> None:
     """Poles, signs, trees and buildings on both sides, at several lateral depths."""
     v = int(rng.integers(VARIANTS))
-    metal = world.texture("metal", v)
-    bark = world.texture("bark", v)
-    leaves = [world.texture("foliage", v + i) for i in range(2)]
-    facades = [world.texture("facade", v + i) for i in range(3)]
-    sign = world.texture("sign", v)
+    metal = m.texture("metal", v)
+    bark = m.texture("bark", v)
+    leaves = [m.texture("foliage", v + i) for i in range(2)]
+    facades = [m.texture("facade", v + i) for i in range(3)]
+    sign = m.texture("sign", v)
     for side, edge in ((1, road.y_left_edge_m), (-1, road.y_right_edge_m)):
         x = road.x_start_m + rng.uniform(0, road.roadside_spacing_m)
         while x < road.x_end_m:

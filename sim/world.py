@@ -32,7 +32,7 @@ with c_output_suppressed():
 
 from sim import meshes, textures
 from sim.camera import CameraConfig, view_matrix_gl
-from sim.scenery import RoadConfig, StaticShape, build_scenery
+from sim.scenery import RoadConfig, Scenery, StaticShape, build_scenery
 from sim.vehicles import VehicleSpec, parts
 
 
@@ -121,7 +121,7 @@ class World:
         for h, w in {(camera.height_px * k, camera.width_px * k) for k in (1, camera.supersample)}:
             if h not in self._sky or self._sky[h].shape[1] != w:
                 self._sky[h] = textures.sky_gradient(h, w, h * 0.5)
-        build_scenery(self, road, self.rng)
+        self.add_scenery(build_scenery(road, self.rng))
 
     # ------------------------------------------------------------------ lifecycle
     @property
@@ -191,6 +191,13 @@ class World:
                 c.changeVisualShape(uid, -1, textureUniqueId=texture_id)
             self._register(uid, 0)
         return uids
+
+    def add_scenery(self, scenery: Scenery) -> None:
+        """Add the static bodies of ``scenery``: its textures loaded in the order listed, then
+        one ``add_static_shapes`` per material."""
+        ids = {ref: self.texture(ref.kind, ref.variant) for ref in scenery.textures}
+        for g in scenery.groups:
+            self.add_static_shapes(g.shapes, None if g.texture is None else ids[g.texture], g.rgb)
 
     def add_static_box(self, center_m, half_extents_m, texture_id: int | None, rgb=(1.0, 1.0, 1.0)) -> int:
         """One static box (``half_extents_m`` [m]); returns its body uid."""

@@ -18,7 +18,7 @@ import sys
 # 2 cores). Set before anything imports numpy.
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
-from bittc_core.errors import CliError
+from bittc_core.errors import BittcError
 
 #: subcommand name -> module; heavy imports (torch, pybullet) stay inside each run()
 COMMANDS: dict[str, str] = {
@@ -54,10 +54,13 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
-    args = parser.parse_args(argv)
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as exit_:  # argparse has printed the usage and the error (or --help)
+        return int(exit_.code or 0)
     try:
         return int(args._run(args) or 0)
-    except CliError as err:
+    except BittcError as err:  # CliError (a flag) or a library error (a value)
         print(f"bittc {args.command}: error: {err}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:

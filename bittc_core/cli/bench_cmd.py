@@ -6,7 +6,7 @@ import argparse
 import sys
 
 from bittc_core.cli.common import check_frame_size, parse_size
-from bittc_core.errors import CliError
+from bittc_core.errors import BittcError, CliError
 
 DEFAULT_CONFIG = "cpu-small-corr"
 
@@ -110,6 +110,6 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(["bench", *(sys.argv[1:] if argv is None else argv)])
     try:
         return run(args)
-    except CliError as err:
+    except BittcError as err:
         print(f"bench: error: {err}", file=sys.stderr)
         return 2

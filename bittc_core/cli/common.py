@@ -67,18 +67,43 @@ def texture_style(ground: str, vehicles: str):
     return TextureStyle(ground, vehicles)
 
 
+#: every --seed is an integer in [0, MAX_SEED] (numpy's legacy seeding and torch take it)
 MAX_SEED = 2**32 - 1
 DEVICES = ("auto", "cpu", "cuda")
 
 
+def add_seed_flag(parser, what: str, default: int | None = 0) -> None:
+    """--seed (``check_seed`` bounds it); ``default`` None: required."""
+    tail = "" if default is None else f"; default {default}"
+    parser.add_argument("--seed", type=int, default=default, required=default is None,
+                        help=f"{what} (0 to 2^32 - 1{tail})")
+
+
+def check_seed(value: int, flag: str = "--seed") -> int:
+    """A seed in [0, MAX_SEED]: the bounds of every subcommand's --seed."""
+    return non_negative_int(flag, value, MAX_SEED)
+
+
 def add_device_flag(parser) -> None:
-    parser.add_argument("--device", default="auto", help="auto, cpu or cuda")
+    parser.add_argument("--device", default="auto", choices=DEVICES,
+                        help="where the network runs: auto (cuda when available, default), cpu or cuda")
 
 
 def check_device(value: str) -> str:
     if value not in DEVICES:
         raise CliError(f"--device {value!r}: expected auto, cpu or cuda")
     return value
+
+
+def flag_error(err: Exception, flags: dict[str, str]) -> Exception:
+    """A library error whose message starts with a field name (``"seed -1: must be >= 0"``,
+    ``"seeds: ..."``) -> a ``CliError`` with the same message naming the field's flag
+    (``flags[field]``); any other error is returned as it is (``main`` prints it too)."""
+    text = str(err)
+    for field, flag in flags.items():
+        if text.startswith(field) and text[len(field):len(field) + 1] in ("", " ", ":"):
+            return CliError(flag + text[len(field):])
+    return err
 
 
 def writable_dir(path: str) -> Path:
@@ -97,6 +122,8 @@ def writable_dir(path: str) -> Path:
 
 
 BACKENDS = ("torch", "onnxruntime")
+#: bittc_core.estimator.TTA_MODES, kept here so --help imports no torch (the tests compare them)
+TTA_MODES = ("none", "flip")
 
 
 def add_backend_flags(parser) -> None:

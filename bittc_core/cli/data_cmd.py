@@ -12,7 +12,7 @@ def add_parser(sub) -> argparse.ArgumentParser:
     p = sub.add_parser("data", help="inspect a generated dataset")
     dsub = p.add_subparsers(dest="data_command", metavar="ACTION", required=True)
     s = dsub.add_parser("stats", help="counts per split and the tau histogram over actor pixels")
-    s.add_argument("dir")
+    s.add_argument("dir", help="a dataset folder made by `bittc generate`")
     s.add_argument("--json", action="store_true", help="print the statistics as JSON")
     return p
 

@@ -22,11 +22,11 @@ import time
 from pathlib import Path
 
 from bittc_core.atomic import write_text_atomic
-from bittc_core.cli.common import add_backend_flags, add_device_flag, backend_kwargs, check_device
-from bittc_core.errors import CliError
+from bittc_core.cli.common import (TTA_MODES, add_backend_flags, add_device_flag, add_seed_flag, backend_kwargs,
+                                   check_device, check_seed, flag_error)
+from bittc_core.errors import CliError, ConfigError
 
 METHODS = ("bittc", "flow", "oracle", "oracle-auc")
-TTA_MODES = ("none", "flip")  # bittc_core.estimator.TTA_MODES, kept here so --help imports no torch
 SPLITS = ("train", "val", "test")
 
 
@@ -39,16 +39,18 @@ def add_parser(sub) -> argparse.ArgumentParser:
     p.add_argument("--tau", type=float, nargs="+", default=[0.9, 1.6, 2.4], metavar="S",
                    help="with --scenarios: the fences' thresholds [s] (default 0.9 1.6 2.4)")
     p.add_argument("--plot", default=None, help="with --scenarios: also write this PNG of the inside-share curve")
-    p.add_argument("--seed", type=int, default=0, help="with --scenarios: scenery seed (default 0)")
+    add_seed_flag(p, "with --scenarios: scenery seed")
     p.add_argument("--frame-stride", type=int, default=1, metavar="N",
                    help="with --scenarios: pair each frame with the one N frames before (default 1)")
-    p.add_argument("--method", required=True, help="bittc, flow, oracle, or oracle-auc (exact geofences; "
+    p.add_argument("--method", required=True, choices=METHODS, help="bittc, flow, oracle, or oracle-auc (exact geofences; "
                    "continuous output from their AUC at the shipped network's levels: the floor of its AUC)")
     p.add_argument("--weights", default=None, help="checkpoint for bittc (default: shipped weights)")
-    p.add_argument("--out", default=None, help="JSON file to write")
-    p.add_argument("--split", default="test", help="train, val or test (default test)")
+    p.add_argument("--out", default=None, metavar="FILE",
+                   help="JSON file to write, replaced if it exists (default: eval_METHOD_SPLIT.json, or "
+                        "eval_METHOD_scenarios_SUITE.json, in the current folder; refused if that file exists)")
+    p.add_argument("--split", default="test", choices=SPLITS, help="train, val or test (default test)")
     p.add_argument("--limit", type=int, default=None, help="evaluate the first N pairs only")
-    p.add_argument("--tta", default="none", help="bittc only: 'flip' averages the network over the plain "
+    p.add_argument("--tta", default="none", choices=TTA_MODES, help="bittc only: 'flip' averages the network over the plain "
                    "and the mirrored frames (1.4-2.2x the latency); default 'none'")
     add_device_flag(p)
     add_backend_flags(p)
@@ -80,8 +82,9 @@ def _check(args) -> Path:
 
         try:
             args.tau = check_thresholds(args.tau)
-        except CliError as e:
+        except ConfigError as e:
             raise CliError(f"--tau: {e}") from None
+        check_seed(args.seed)
         if not 1 <= args.frame_stride <= 10:
             raise CliError(f"--frame-stride {args.frame_stride}: must be in [1, 10]")
         if args.plot is not None and not args.plot.endswith(".png"):
@@ -89,6 +92,8 @@ def _check(args) -> Path:
     default = f"eval_{args.method}_scenarios_{Path(args.scenarios).stem}.json" if args.scenarios else \
         f"eval_{args.method}_{args.split}.json"
     out = Path(args.out or default)
+    if args.out is None and out.exists():
+        raise CliError(f"{default!r} exists (an earlier result); pass --out {default} to replace it, or another --out")
     if out.suffix != ".json":
         raise CliError(f"--out {str(out)!r}: expected a .json file")
     if not out.parent.exists():
@@ -202,8 +207,11 @@ def run(args) -> int:
     from bittc_core.estimator import make_estimator
     from bittc_core.train.data import open_split
 
-    dataset = open_split(args.data, args.split)
-    estimator = make_estimator(args.method, device=args.device, tta=args.tta, **args.backend_kw)
+    try:
+        dataset = open_split(args.data, args.split)
+        estimator = make_estimator(args.method, device=args.device, tta=args.tta, **args.backend_kw)
+    except ConfigError as e:
+        raise flag_error(e, {"dataset": "--data", "split": "--split", "device": "--device"}) from None
     against = None
     if args.backend != "torch":  # the same pairs on torch, for the agreement
         against = make_estimator(args.method, weights=args.weights, device="cpu", tta=args.tta)

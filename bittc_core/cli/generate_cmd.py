@@ -6,7 +6,14 @@ import argparse
 import json
 from pathlib import Path
 
-from bittc_core.cli.common import parse_size
+from bittc_core.cli.common import add_seed_flag, check_seed, flag_error, parse_size
+from bittc_core.errors import ConfigError
+
+#: the fields of ``GenerationConfig`` and ``generate`` -> their flags
+_FLAGS = {"seed": "--seed", "clip_length": "--clip-length", "fps_hz": "--fps", "ahead_share": "--ahead-share",
+          "supersample": "--supersample", "ground_texture": "--ground-texture", "vehicle_texture": "--vehicle-texture",
+          "split": "--split", "samples": "--samples", "workers": "--workers", "backend": "--backend",
+          "ray_address": "--ray-address", "output folder": "--out"}  # fmt: skip
 
 
 def add_parser(sub) -> argparse.ArgumentParser:
@@ -15,7 +22,7 @@ def add_parser(sub) -> argparse.ArgumentParser:
                        "finished samples and regenerates damaged ones; the manifest and dataset card are rebuilt.")  # fmt: skip
     p.add_argument("--out", required=True, help="dataset directory")
     p.add_argument("--samples", type=int, required=True, help="samples in this split (indices 0..N-1)")
-    p.add_argument("--seed", type=int, required=True, help="dataset seed")
+    add_seed_flag(p, "dataset seed", default=None)
     p.add_argument("--split", default="train", choices=["train", "val", "test"], help="split (disjoint seed ranges)")
     p.add_argument("--size", default="96x288", help="HxW in px (default 96x288)")
     p.add_argument("--fps", type=float, default=10.0, help="frame rate [Hz] (default 10)")
@@ -31,20 +38,29 @@ def add_parser(sub) -> argparse.ArgumentParser:
                    help="this share of the samples has a braking case ahead: a GVT, car, van or truck in or near "
                         "the ego's lane (overlap 25-100 %% on either side), stationary, slower or braking, at 0.3-4 s TTC, ego "
                         "10-130 km/h, beside the random scene (default 0: random scenes only, as in bittc_v1-v3)")
-    p.add_argument("--workers", type=int, default=1)
-    p.add_argument("--backend", default="local", help="local (process pool, default) or ray")
+    p.add_argument("--workers", type=int, default=1, help="parallel worker processes or Ray tasks (default 1)")
+    p.add_argument("--backend", default="local", choices=("local", "ray"), help="local (process pool, default) or ray")
     p.add_argument("--ray-address", default=None, help="address of an existing Ray cluster (default: start a local one)")
-    p.add_argument("--no-progress", action="store_true")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
     return p
 
 
 def run(args) -> int:
+    h, w = parse_size(args.size)
+    check_seed(args.seed)
+    try:
+        stats = _generate(args, h, w)
+    except ConfigError as e:
+        raise flag_error(e, _FLAGS) from None
+    print(json.dumps(stats))
+    return 0
+
+
+def _generate(args, h: int, w: int) -> dict:
     from bittc_core.data.generate import GenerationConfig, generate
 
-    h, w = parse_size(args.size)
     cfg = GenerationConfig(seed=args.seed, height_px=h, width_px=w, fps_hz=args.fps, clip_length=args.clip_length, supersample=args.supersample,
                            ground_texture=args.ground_texture, vehicle_texture=args.vehicle_texture,
                            ahead_share=args.ahead_share)
-    stats = generate(Path(args.out), cfg, args.split, args.samples, args.workers, args.backend, args.ray_address, progress=not args.no_progress)
-    print(json.dumps(stats))
-    return 0
+    return generate(Path(args.out), cfg, args.split, args.samples, args.workers, args.backend, args.ray_address,
+                    progress=not args.no_progress)  # fmt: skip

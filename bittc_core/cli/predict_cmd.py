@@ -29,7 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
-from bittc_core.cli.common import (add_backend_flags, add_device_flag, backend_kwargs, check_device,
+from bittc_core.cli.common import (TTA_MODES, add_backend_flags, add_device_flag, backend_kwargs, check_device,
                                    check_frame_size, parse_size, writable_dir)
 from bittc_core.errors import CliError
 
@@ -46,9 +46,10 @@ def add_parser(sub) -> argparse.ArgumentParser:
     p.add_argument("--out", required=True, metavar="DIR", help="output folder")
     p.add_argument("--tau", type=float, nargs="+", default=list(DEFAULT_TAU_S), metavar="S",
                    help="geofence thresholds [s] from the latest frame (default 0.5 1 2)")
-    p.add_argument("--method", default="bittc", help="bittc (the network, default) or flow (the DIS baseline)")
+    p.add_argument("--method", default="bittc", choices=METHODS, help="bittc (the network, default) or flow (the DIS baseline)")
     p.add_argument("--weights", default=None, help="checkpoint for bittc (default: shipped weights)")
-    p.add_argument("--tta", default="none", help="bittc only: 'flip' averages over the mirrored frames")
+    p.add_argument("--tta", default="none", choices=TTA_MODES,
+                   help="bittc only: 'flip' averages over the mirrored frames (default none)")
     add_backend_flags(p)
     p.add_argument("--size", default=None, metavar="HxW",
                    help="resize both frames to HxW px first (area interpolation); default: as they are")
@@ -92,7 +93,6 @@ def run(args) -> int:
     from bittc_core.data.npz_writer import save_npz
     from bittc_core.estimator import make_estimator
     from bittc_core.estimator.base import as_thresholds, quantize
-    from bittc_core.estimator.network import TTA_MODES
     from bittc_core.ttc import eta_to_tau
     from sim.video import ttc_overlay
 

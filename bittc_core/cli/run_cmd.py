@@ -7,7 +7,7 @@ import json
 from pathlib import Path
 
 import scenarios
-from bittc_core.cli.common import MAX_SEED, non_negative_int, parse_size, texture_style, writable_dir
+from bittc_core.cli.common import add_seed_flag, check_seed, parse_size, texture_style, writable_dir
 from bittc_core.cli.loop_flags import add_controller_flags, controller_from_args
 from bittc_core.errors import CliError
 from sim.camera import CameraConfig
@@ -21,7 +21,7 @@ def add_parser(sub) -> argparse.ArgumentParser:
     p.add_argument("scenario", help="bundled name (see `bittc scenarios`) or path to a YAML file")
     add_controller_flags(p)
     p.add_argument("--out", required=True, help="output directory")
-    p.add_argument("--seed", type=int, default=0, help="scenery/appearance/traffic seed (default 0)")
+    add_seed_flag(p, "scenery/appearance/traffic seed")
     p.add_argument("--video", action="store_true", help="also write camera.mp4 with the exact TTC overlay and a HUD")
     add_camera_flags(p)
     return p
@@ -68,7 +68,7 @@ def run(args) -> int:
     from sim.runner import run_case
     from sim.suite import format_table, run_cases
 
-    non_negative_int("--seed", args.seed, MAX_SEED)
+    check_seed(args.seed)
     camera = camera_from_args(args)
     textures = textures_from_args(args)
     cases = scenarios.resolve(args.scenario)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 
 import scenarios
-from bittc_core.cli.common import MAX_SEED, non_negative_int, writable_dir
+from bittc_core.cli.common import add_seed_flag, check_seed, writable_dir
 from bittc_core.cli.loop_flags import add_controller_flags, controller_from_args
 from bittc_core.cli.run_cmd import add_camera_flags, camera_from_args, textures_from_args
 
@@ -17,9 +17,9 @@ def add_parser(sub) -> argparse.ArgumentParser:
     add_controller_flags(p, default="oracle")
     p.add_argument("--out", required=True, help="output directory")
     p.add_argument("--scenarios", default=None, help="comma-separated names/families (default: all bundled)")
-    p.add_argument("--seed", type=int, default=0)
+    add_seed_flag(p, "scenery/appearance/traffic seed of every case")
     p.add_argument("--markdown", action="store_true", help="print the table as Markdown (as in the README)")
-    p.add_argument("--video", action="store_true")
+    p.add_argument("--video", action="store_true", help="also write camera.mp4 for every case")
     add_camera_flags(p)
     return p
 
@@ -27,7 +27,7 @@ def add_parser(sub) -> argparse.ArgumentParser:
 def run(args) -> int:
     from sim.suite import format_table, run_cases
 
-    non_negative_int("--seed", args.seed, MAX_SEED)
+    check_seed(args.seed)
     camera = camera_from_args(args)
     textures = textures_from_args(args)
     if args.scenarios:

@@ -7,6 +7,7 @@ import argparse
 import shlex
 import sys
 
+from bittc_core.cli.common import flag_error
 from bittc_core.errors import CliError, ConfigError
 
 
@@ -46,15 +47,6 @@ _FLAGS = {"suites": "--suite", "controllers": "--controllers", "num_alphas": "--
           "onnx": "--onnx"}  # fmt: skip
 
 
-def _flag_error(e: ConfigError) -> CliError:
-    """A library message 'key: ...' -> the same message naming the flag."""
-    text = str(e)
-    key, sep, rest = text.partition(":")
-    if sep and key in _FLAGS:
-        return CliError(f"{_FLAGS[key]}:{rest}")
-    return CliError(text)
-
-
 def settings_from_args(args):
     from sim.sweep.plan import SweepSettings
 
@@ -71,7 +63,7 @@ def execute(settings, args, command: str) -> int:
         outcome = run_sweep(settings, _out(args.out), workers=args.workers, backend=args.backend,
                             ray_address=args.ray_address, resume=args.resume, command=command)  # fmt: skip
     except ConfigError as e:
-        raise _flag_error(e) from None
+        raise flag_error(e, _FLAGS) from None
     print(outcome.summary_md)
     rate = f", {outcome.runs_per_min:.1f} runs/min" if outcome.runs_per_min else ""
     print(f"{outcome.runs} runs ({outcome.executed} executed in {outcome.seconds:.0f} s on {args.workers} "

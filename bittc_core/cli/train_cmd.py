@@ -15,8 +15,8 @@ import sys
 from pathlib import Path
 
 from bittc_core.atomic import write_text_atomic
-from bittc_core.cli.common import add_device_flag, check_device
-from bittc_core.errors import CliError
+from bittc_core.cli.common import add_device_flag, add_seed_flag, check_device, check_seed, flag_error
+from bittc_core.errors import CliError, ConfigError
 
 STAGE_CHOICES = ("flow", "binary", "continuous", "all")
 
@@ -31,9 +31,9 @@ def add_parser(sub) -> argparse.ArgumentParser:
     p.add_argument("--init", default=None, help="start from the weights of this checkpoint (same config, or a config "
                    "this one grows from, such as cpu-small for cpu-medium or cpu-small-corr: the added blocks start as the "
                    "identity)")
-    p.add_argument("--seed", type=int, default=0)
+    add_seed_flag(p, "seed of the initial weights, the data order and the augmentation")
     p.add_argument("--steps", type=int, default=2000, help="optimiser steps per stage (default 2000)")
-    p.add_argument("--batch-size", type=int, default=8)
+    p.add_argument("--batch-size", type=int, default=8, help="image pairs per optimiser step (default 8)")
     p.add_argument("--lr", type=float, default=3e-4, help="peak learning rate (default 3e-4)")
     p.add_argument("--warmup-steps", type=int, default=200,
                    help="linear warm-up steps before the cosine decay, per stage (default 200)")
@@ -43,7 +43,7 @@ def add_parser(sub) -> argparse.ArgumentParser:
                    help="also keep the weights of every validation step, <stem>.<stage>.step<NNNNNN>.pt beside --out "
                         "(for weight averaging: docs/average_weights.py)")
     add_device_flag(p)
-    p.add_argument("--stage", default="binary", help="flow, binary, continuous or all (default binary)")
+    p.add_argument("--stage", default="binary", choices=STAGE_CHOICES, help="flow, binary, continuous or all (default binary)")
     p.add_argument("--actor-weight", type=float, default=1.0,
                    help="binary stage: loss weight of vehicle (actor) pixels, moving or not; "
                         "scenery pixels 1 (default 1)")
@@ -83,8 +83,7 @@ def _check(args) -> None:
                         ("--val-every", args.val_every), ("--val-limit", args.val_limit)):
         if value <= 0:
             raise CliError(f"{flag} {value}: must be > 0")
-    if args.seed < 0:
-        raise CliError(f"--seed {args.seed}: must be >= 0")
+    check_seed(args.seed)
     if not 0 < args.lr < 1:
         raise CliError(f"--lr {args.lr}: must be in (0, 1)")
     if args.warmup_steps < 0:
@@ -183,12 +182,12 @@ def run(args) -> int:
                        "pass --resume or choose another --out")
     if args.teacher and Path(args.teacher).resolve() in (paths.best.resolve(), paths.last.resolve()):
         raise CliError(f"--teacher {args.teacher!r}: is this run's own checkpoint (--out {args.out!r} writes it)")
-    device = pick_device(args.device)
-    torch.manual_seed(args.seed)
-    if args.init:
-        net = init_network(args.init, args.config)
-    else:
-        net = BinaryTTCNet(get_config(args.config))
+    try:
+        device = pick_device(args.device)
+        torch.manual_seed(args.seed)
+        net = init_network(args.init, args.config) if args.init else BinaryTTCNet(get_config(args.config))
+    except ConfigError as e:
+        raise flag_error(e, {"device": "--device", "initial checkpoint": "--init"}) from None
     lr_mults = parse_lr_mults(args.lr_mult)
     teacher, distill_weight = None, 0.0
     if args.teacher:
@@ -196,8 +195,11 @@ def run(args) -> int:
         teacher = build_network(load_checkpoint(args.teacher, map_location="cpu"))
         if teacher.config != net.config:
             raise CliError(f"--teacher {args.teacher!r}: its model config differs from --config {args.config!r}")
-    train_set = open_split(args.data, "train", augment=True, seed=args.seed)
-    val_set = open_split(args.data, "val", seed=args.seed)
+    try:
+        train_set = open_split(args.data, "train", augment=True, seed=args.seed)
+        val_set = open_split(args.data, "val", seed=args.seed)
+    except ConfigError as e:
+        raise flag_error(e, {"dataset": "--data"}) from None
     for name, ds in (("train", train_set), ("val", val_set)):
         dt = float(ds[0]["dt_s"])
         if abs(dt - net.config.frame_dt_s) > 1e-6:

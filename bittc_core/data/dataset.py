@@ -34,7 +34,7 @@ INPATH_HALF_WIDTH_M = 1.5  # [m] |X| of the camera frame: the ego's half width p
 INPATH_MAX_DEPTH_M = 80.0  # [m]
 
 from bittc_core.data.format import SPLITS, read_sample
-from bittc_core.errors import CliError
+from bittc_core.errors import ConfigError
 
 
 class TTCDataset(Dataset):
@@ -42,14 +42,14 @@ class TTCDataset(Dataset):
                  crop_hw: tuple[int, int] | None = None, pair: int | str = -1):  # fmt: skip
         self.root = Path(root)
         if split not in SPLITS:
-            raise CliError(f"split {split!r}: must be one of {', '.join(SPLITS)}")
+            raise ConfigError(f"split {split!r}: must be one of {', '.join(SPLITS)}")
         manifest = self.root / "manifest.jsonl"
         if not manifest.exists():
-            raise CliError(f"{str(self.root)!r}: no manifest.jsonl; is it a dataset made by `bittc generate`?")
+            raise ConfigError(f"{str(self.root)!r}: no manifest.jsonl; is it a dataset made by `bittc generate`?")
         rows = [json.loads(line) for line in manifest.read_text().splitlines() if line.strip()]
         self.samples = [r for r in rows if r["split"] == split]
         if not self.samples:
-            raise CliError(f"{str(self.root)!r}: the {split} split is empty")
+            raise ConfigError(f"{str(self.root)!r}: the {split} split is empty")
         self.split = split
         self.augment = augment
         self.seed = seed
@@ -79,7 +79,7 @@ class TTCDataset(Dataset):
         if self.crop_hw is not None:
             ch, cw = self.crop_hw
             if ch > H or cw > W:
-                raise CliError(f"crop_hw {self.crop_hw} is larger than the samples ({H}x{W})")
+                raise ConfigError(f"crop_hw {self.crop_hw} is larger than the samples ({H}x{W})")
             y0 = int(round(K[3] - (ch - 1) / 2))
             x0 = int(round(K[2] - (cw - 1) / 2))
             y0, x0 = min(max(y0, 0), H - ch), min(max(x0, 0), W - cw)

@@ -22,12 +22,12 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from bittc_core.cli.common import texture_style
 from bittc_core.data.format import SPLITS, sample_dirname, sample_is_complete, write_sample
-from bittc_core.errors import CliError
+from bittc_core.errors import ConfigError
 
 SPLIT_SEED_BASE = {"train": 0, "val": 1_000_000_000, "test": 2_000_000_000}
 MAX_SAMPLES_PER_SPLIT = 1_000_000_000
+BACKENDS = ("local", "ray")  # a process pool or Ray tasks
 MAX_ATTEMPTS = 3  # tries per sample before the run fails
 # a sample allocates ~10^5 short-lived Python objects (mesh lists, traffic, JSON): with
 # the default thresholds the cyclic GC runs often and walks every long-lived object of a
@@ -57,16 +57,21 @@ class GenerationConfig:
 
     def __post_init__(self) -> None:
         if self.seed < 0:
-            raise CliError(f"--seed {self.seed}: must be >= 0")
+            raise ConfigError(f"seed {self.seed}: must be >= 0")
         if not 2 <= self.clip_length <= 32:
-            raise CliError(f"--clip-length {self.clip_length}: must be in [2, 32]")
+            raise ConfigError(f"clip_length {self.clip_length}: must be in [2, 32]")
         if not 1.0 <= self.fps_hz <= 100.0:
-            raise CliError(f"--fps {self.fps_hz}: must be in [1, 100] Hz")
+            raise ConfigError(f"fps_hz {self.fps_hz}: must be in [1, 100] Hz")
         if not 0.0 <= self.ahead_share <= 1.0:
-            raise CliError(f"--ahead-share {self.ahead_share}: must be in [0, 1]")
+            raise ConfigError(f"ahead_share {self.ahead_share}: must be in [0, 1]")
         if self.supersample not in (1, 2, 3, 4):
-            raise CliError(f"--supersample {self.supersample}: must be 1, 2, 3 or 4")
-        texture_style(self.ground_texture, self.vehicle_texture)
+            raise ConfigError(f"supersample {self.supersample}: must be 1, 2, 3 or 4")
+        from sim.textures import GROUND_STYLES, VEHICLE_STYLES
+
+        if self.ground_texture not in GROUND_STYLES:
+            raise ConfigError(f"ground_texture {self.ground_texture!r}: must be one of {', '.join(GROUND_STYLES)}")
+        if self.vehicle_texture not in VEHICLE_STYLES:
+            raise ConfigError(f"vehicle_texture {self.vehicle_texture!r}: must be one of {', '.join(VEHICLE_STYLES)}")
 
 
 def sample_seed(split: str, index: int) -> int:
@@ -144,24 +149,24 @@ def _make_many(cfg_dict: dict, split_dir: str, split: str, indices: list[int]) -
 def prepare_dir(out: Path, cfg: GenerationConfig) -> None:
     """Create/validate DIR: empty, or a dataset made with the same shared config."""
     if out.exists() and not out.is_dir():
-        raise CliError(f"--out {str(out)!r}: exists and is not a directory")
+        raise ConfigError(f"output folder {str(out)!r}: exists and is not a directory")
     gen = out / "generation.yaml"
     if out.exists() and any(out.iterdir()):
         if not gen.exists():
-            raise CliError(f"--out {str(out)!r}: is not empty and is not a bittc dataset (no generation.yaml)")
+            raise ConfigError(f"output folder {str(out)!r}: is not empty and is not a bittc dataset (no generation.yaml)")
         try:
             old = yaml.safe_load(gen.read_text())
         except yaml.YAMLError:
-            raise CliError(f"{gen}: malformed YAML; remove the folder or choose another --out") from None
+            raise ConfigError(f"{gen}: malformed YAML; remove the folder or choose another output folder") from None
         if not isinstance(old, dict):
-            raise CliError(f"{gen}: not a mapping of generation settings; remove the folder or choose another --out")
+            raise ConfigError(f"{gen}: not a mapping of generation settings; remove the folder or choose another output folder")
         old.setdefault("ground_texture", "smooth")  # datasets made before the option had the smooth ground
         old.setdefault("vehicle_texture", "plain")  # and the plain vehicles
         old.setdefault("ahead_share", 0.0)  # and no braking cases ahead
         mine = asdict(cfg)
         for k in sorted(set(old) | set(mine)):
             if old.get(k) != mine.get(k):
-                raise CliError(f"--out {str(out)!r}: was generated with {k} = {old.get(k)!r}, this run asks for {mine.get(k)!r}")
+                raise ConfigError(f"output folder {str(out)!r}: was generated with {k} = {old.get(k)!r}, this run asks for {mine.get(k)!r}")
         return
     try:
         out.mkdir(parents=True, exist_ok=True)
@@ -169,7 +174,7 @@ def prepare_dir(out: Path, cfg: GenerationConfig) -> None:
         tmp.write_text(yaml.safe_dump(asdict(cfg), sort_keys=True))
         os.replace(tmp, gen)
     except OSError as e:
-        raise CliError(f"--out {str(out)!r}: not writable ({e.strerror})") from None
+        raise ConfigError(f"output folder {str(out)!r}: not writable ({e.strerror})") from None
 
 
 def pending_indices(split_dir: Path, n: int, clip_length: int) -> tuple[list[int], int]:
@@ -198,20 +203,20 @@ def generate(out: Path, cfg: GenerationConfig, split: str, n_samples: int, worke
     under ``STEADY_MIN_S``); ``samples_per_s`` counts the whole run, start-up included.
     """
     if split not in SPLITS:
-        raise CliError(f"--split {split!r}: must be one of {', '.join(SPLITS)}")
+        raise ConfigError(f"split {split!r}: must be one of {', '.join(SPLITS)}")
     if not 0 < n_samples <= MAX_SAMPLES_PER_SPLIT:
-        raise CliError(f"--samples {n_samples}: must be in [1, {MAX_SAMPLES_PER_SPLIT}]")
+        raise ConfigError(f"samples {n_samples}: must be in [1, {MAX_SAMPLES_PER_SPLIT}]")
     if workers <= 0:
-        raise CliError(f"--workers {workers}: must be > 0")
-    if backend not in ("local", "ray"):
-        raise CliError(f"--backend {backend!r}: must be 'local' or 'ray'")
+        raise ConfigError(f"workers {workers}: must be > 0")
+    if backend not in BACKENDS:
+        raise ConfigError(f"backend {backend!r}: must be one of {', '.join(BACKENDS)}")
     if ray_address is not None and backend != "ray":
-        raise CliError("--ray-address needs --backend ray")
+        raise ConfigError(f"ray_address {ray_address!r}: needs backend 'ray'")
     if backend == "ray":
         try:
             import ray  # noqa: F401
         except ImportError:
-            raise CliError("--backend ray: Ray is not installed; pip install 'bittc-sim[ray]'") from None
+            raise ConfigError("backend 'ray': Ray is not installed; pip install 'bittc-sim[ray]'") from None
     prepare_dir(out, cfg)
     split_dir = out / split
     todo, damaged = pending_indices(split_dir, n_samples, cfg.clip_length)
@@ -231,7 +236,7 @@ def generate(out: Path, cfg: GenerationConfig, split: str, n_samples: int, worke
 
     rebuild_manifest_and_card(out, cfg, run)
     if run["failed"]:
-        raise CliError(f"{len(run['failed'])} sample(s) of {split} failed after {MAX_ATTEMPTS} tries: indices {run['failed'][:10]}; "
+        raise ConfigError(f"{len(run['failed'])} sample(s) of {split} failed after {MAX_ATTEMPTS} tries: indices {run['failed'][:10]}; "
                        "re-run the same command to retry them")  # fmt: skip
     return run
 

@@ -29,7 +29,7 @@ def make_estimator(method: str, weights: str | None = None, device: str = "auto"
         if method != "bittc":
             raise EstimatorInputError(f"backend 'onnxruntime' runs the network (method 'bittc'), not {method!r}")
         if onnx is None:
-            raise EstimatorInputError("backend 'onnxruntime' needs onnx=DIR, a folder made by `bittc export --onnx DIR`")
+            raise EstimatorInputError("backend 'onnxruntime' needs onnx=DIR, an export folder (`bittc export` makes one)")
         if device not in ("auto", "cpu"):
             raise EstimatorInputError(f"device {device!r}: the onnxruntime backend runs on the CPU")
         from bittc_core.estimator.onnx import OnnxBittcEstimator
@@ -40,7 +40,7 @@ def make_estimator(method: str, weights: str | None = None, device: str = "auto"
     if method == "bittc":
         return BittcEstimator.from_checkpoint(weights, device=device, tta=tta)
     if weights is not None:
-        raise EstimatorInputError(f"--weights {weights!r} only applies to method 'bittc', not {method!r}")
+        raise EstimatorInputError(f"weights {weights!r} only apply to method 'bittc', not {method!r}")
     if tta != "none":
         raise EstimatorInputError(f"tta={tta!r} only applies to method 'bittc', not {method!r}")
     if method == "flow":

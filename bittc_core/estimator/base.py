@@ -16,14 +16,14 @@ from abc import ABC, abstractmethod
 import numpy as np
 import torch
 
-from bittc_core.errors import CliError
+from bittc_core.errors import ConfigError
 from bittc_core.ttc import eta_to_tau, tau_to_eta
 
 
 RANGE_RTOL = 1e-6  # thresholds computed in float round-trips may graze the range ends
 
 
-class EstimatorInputError(CliError, ValueError):
+class EstimatorInputError(ConfigError):
     """An image or threshold list the estimator cannot use; the message names it."""
 
 

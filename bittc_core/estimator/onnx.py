@@ -75,7 +75,7 @@ class OnnxBittcEstimator(StreamingNetEstimator):
         if tuple(image.shape[-2:]) != self.size_px:
             raise EstimatorInputError(f"image size {tuple(image.shape[-2:])} px: the ONNX export in "
                                       f"{str(self.folder)!r} takes {self.size_px} px; export it at this size "
-                                      "(bittc export --onnx DIR --size HxW)")  # fmt: skip
+                                      "(`bittc export` takes a size)")  # fmt: skip
 
     def _run(self, graph: str, feeds: dict) -> list[np.ndarray]:
         return self.sessions[graph].run(None, feeds)

@@ -54,7 +54,7 @@ def read_manifest(folder: str | Path, *, graphs: tuple[str, ...], verify_hashes:
     folder = Path(folder)
     path = folder / MANIFEST
     if not folder.is_dir():
-        raise ExportError(f"ONNX export folder {str(folder)!r}: no such folder (make one with `bittc export --onnx`)")
+        raise ExportError(f"ONNX export folder {str(folder)!r}: no such folder (`bittc export` makes one)")
     if not path.is_file():
         raise ExportError(f"{str(path)!r}: no manifest; is {str(folder)!r} an ONNX export folder?")
     try:

@@ -128,7 +128,7 @@ def _check_net_backend(s: SweepSettings) -> None:
     if "geofence" not in s.controllers:
         raise ConfigError("net_backend: onnxruntime runs the geofence controller's network, which the sweep does not run")
     if s.onnx is None:
-        raise ConfigError("onnx: the onnxruntime network backend needs an export folder (`bittc export --onnx DIR`)")
+        raise ConfigError("onnx: the onnxruntime network backend needs an export folder (`bittc export` makes one)")
     from bittc_core.checkpoint import DEFAULT_WEIGHTS, load_checkpoint
     from bittc_core.estimator.onnx import require_onnxruntime
     from bittc_core.export.graphs import GRAPHS
