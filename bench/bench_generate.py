@@ -40,7 +40,9 @@ def main() -> None:
     args = ap.parse_args()
     h, w = (int(v) for v in args.size.split("x"))
     cfg = GenerationConfig(seed=123, height_px=h, width_px=w, ground_texture=args.ground_texture)
-    print(f"{os.cpu_count()} cores, {h}x{w}, {args.ground_texture} ground, steady state of runs of {args.samples} samples")
+    print(
+        f"{os.cpu_count()} cores, {h}x{w}, {args.ground_texture} ground, steady state of runs of {args.samples} samples"
+    )
     one = timed(cfg, args.samples, 1, "local")
     print(f"local, 1 worker : {one:6.2f} samples/s  ({one:.2f} per worker; target >= 20 per core)")
     two = timed(cfg, args.samples, 2, "local")

@@ -41,14 +41,33 @@ def main() -> None:
     case = scenarios.resolve(args.scenario)[0]
     cam = CameraConfig()
     print(f"{args.scenario}, {args.controller}, latency measured, {cam.height_px}x{cam.width_px} at {cam.fps_hz:g} Hz")
-    cols = ("K", "frames", "jobs", "skipped", "RTF", "RTF_noGT", "render", "traffic", "truth", "gt", "estimator",
-            "control", "total")
+    cols = (
+        "K",
+        "frames",
+        "jobs",
+        "skipped",
+        "RTF",
+        "RTF_noGT",
+        "render",
+        "traffic",
+        "truth",
+        "gt",
+        "estimator",
+        "control",
+        "total",
+    )
     print(("{:>9}" * len(cols)).format(*cols) + "   (ms per frame)")
     for k in args.ks:
         ctrl = controllers.make(args.controller, thresholds_s=default_thresholds(k))
         sim = ScenarioSim(case, cam, args.seed, render=True)
-        loop = ClosedLoop(sim, parse_latency("measured"), num_alphas=k, pairs=True, frame_stride=ctrl.frame_stride,
-                          lag_meter=FenceLagMeter())
+        loop = ClosedLoop(
+            sim,
+            parse_latency("measured"),
+            num_alphas=k,
+            pairs=True,
+            frame_stride=ctrl.frame_stride,
+            lag_meter=FenceLagMeter(),
+        )
         t0 = time.perf_counter()
         loop.drive(ctrl)
         wall = time.perf_counter() - t0
@@ -59,9 +78,11 @@ def main() -> None:
         tm = loop.timing
         gt = tm.get("ground_truth_s", 0.0)
         per = [tm["render_s"], tm["traffic_s"], tm["truth_s"], gt, est_s, tm["controller_s"] - est_s, wall]
-        print(("{:>9}" * 4).format(k, n, len(jobs), sum(r.status == "skipped" for r in loop.records))
-              + "{:>9.2f}{:>9.2f}".format(sim.t_s / wall, sim.t_s / (wall - gt))
-              + ("{:>9.1f}" * len(per)).format(*(1e3 * x / n for x in per)))
+        print(
+            ("{:>9}" * 4).format(k, n, len(jobs), sum(r.status == "skipped" for r in loop.records))
+            + f"{sim.t_s / wall:>9.2f}{sim.t_s / (wall - gt):>9.2f}"
+            + ("{:>9.1f}" * len(per)).format(*(1e3 * x / n for x in per))
+        )
 
 
 if __name__ == "__main__":

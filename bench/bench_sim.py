@@ -50,11 +50,16 @@ def main() -> None:
     med = statistics.median
     frame_ms = med([r + g for r, g in zip(render_ms, gt_ms)])
     step_ms = med([r + g + t for r, g, t in zip(render_ms, gt_ms, traffic_ms)])
-    print(f"scenario {args.scenario}, camera {h}x{w} (supersample {args.supersample}), {args.frames} frames, "
-          f"{len(case.actors) + case.traffic} vehicles, torch-free, 1 process")  # fmt: skip
+    print(
+        f"scenario {args.scenario}, camera {h}x{w} (supersample {args.supersample}), {args.frames} frames, "
+        f"{len(case.actors) + case.traffic} vehicles, torch-free, 1 process"
+    )
     print(f"render           {med(render_ms):7.2f} ms/frame (median)")
     print(f"ground truth     {med(gt_ms):7.2f} ms/frame")
-    print(f"render + GT      {frame_ms:7.2f} ms/frame   (target <= 15 ms at 96x288: {'met' if frame_ms <= 15 else 'NOT met'})")
+    print(
+        f"render + GT      {frame_ms:7.2f} ms/frame   "
+        f"(target <= 15 ms at 96x288: {'met' if frame_ms <= 15 else 'NOT met'})"
+    )
     print(f"traffic (10 substeps) {med(traffic_ms):5.2f} ms/frame")
     print(f"real-time factor {1000.0 / cam.fps_hz / step_ms:7.1f} x  (simulated time / wall time at {cam.fps_hz:g} Hz)")
 

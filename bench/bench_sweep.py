@@ -28,8 +28,12 @@ def main() -> int:
     ap.add_argument("--num-alphas", type=int, nargs="+", default=[1, 4, 16])
     ap.add_argument("--latency", nargs="+", default=["fixed:50"])
     args = ap.parse_args()
-    settings = SweepSettings(suites=tuple(args.suite), controllers=tuple(args.controllers),
-                             num_alphas=tuple(args.num_alphas), latencies=tuple(args.latency))  # fmt: skip
+    settings = SweepSettings(
+        suites=tuple(args.suite),
+        controllers=tuple(args.controllers),
+        num_alphas=tuple(args.num_alphas),
+        latencies=tuple(args.latency),
+    )
     setups = [("local", 1), ("local", 2)]
     try:
         import ray  # noqa: F401
@@ -48,8 +52,10 @@ def main() -> int:
     base = rates[("local", 1)]
     for key, r in rates.items():
         same = results[key] == results[("local", 1)]
-        print(f"{key[0]:>5} x {key[1]}: {r / base:.2f}x the 1-worker rate; results.csv "
-              f"{'identical' if same else 'DIFFERS'}")  # fmt: skip
+        print(
+            f"{key[0]:>5} x {key[1]}: {r / base:.2f}x the 1-worker rate; results.csv "
+            f"{'identical' if same else 'DIFFERS'}"
+        )
     return 0
 
 

@@ -42,11 +42,14 @@ class BenchSettings:
     def __post_init__(self) -> None:
         ks = self.thresholds
         if 1 not in ks or min(ks) < 1 or len(set(ks)) < 2 or len(set(ks)) != len(ks):
-            raise ValueError(f"BenchSettings.thresholds={ks}: the ratios need K = 1 and at least one "
-                             "more K, all distinct and >= 1")
+            raise ValueError(
+                f"BenchSettings.thresholds={ks}: the ratios need K = 1 and at least one more K, all distinct and >= 1"
+            )
         if self.calls <= 0 or self.warmup < 1:
-            raise ValueError(f"BenchSettings: calls={self.calls} must be > 0 and warmup={self.warmup} >= 1 "
-                             "(the first round extracts both frames, it is not a streaming call)")
+            raise ValueError(
+                f"BenchSettings: calls={self.calls} must be > 0 and warmup={self.warmup} >= 1 "
+                "(the first round extracts both frames, it is not a streaming call)"
+            )
 
 
 def _frames(s: BenchSettings, n: int) -> list[np.ndarray]:
@@ -112,8 +115,10 @@ def run_benchmark(s: BenchSettings = BenchSettings(), weights: str | None = None
     est = _network_estimator(s, weights)
     cfg = est.net.config
     frames = _frames(s, s.calls + s.warmup + 1)
-    print(f"config {s.config}: {count_parameters(est.net) / 1e6:.3f} M params, "
-          f"{s.height_px}x{s.width_px} px, {torch.get_num_threads()} threads, streaming")
+    print(
+        f"config {s.config}: {count_parameters(est.net) / 1e6:.3f} M params, "
+        f"{s.height_px}x{s.width_px} px, {torch.get_num_threads()} threads, streaming"
+    )
 
     def geofence(k: int, tta: str = "none"):
         e, thr = est.fork(tta), _taus(cfg, k)
@@ -135,14 +140,24 @@ def run_benchmark(s: BenchSettings = BenchSettings(), weights: str | None = None
         print(f"{k:>4} {t:>10.2f} {ratios.get(k, float('nan')):>10.3f}")
     print(f"extra threshold, least-squares slope over K: {slope_ratio:.3f} of one threshold")
     print(f"continuous ({cfg.cont_levels} maps + AUC + ContRefineNet): {ms['continuous']:.2f} ms")
-    print(f"flip-averaged (tta flip): one threshold {ms['flip_1']:.2f} ms ({ms['flip_1'] / binary[1]:.2f}x), "
-          f"continuous {ms['flip_continuous']:.2f} ms ({ms['flip_continuous'] / ms['continuous']:.2f}x)")
-    print(f"flow baseline (DIS {flow.config.preset} + affine): geofence {ms['flow_geofence']:.2f} ms, "
-          f"continuous {ms['flow_continuous']:.2f} ms")
-    return {"binary_ms": binary, "extra_over_one": ratios, "extra_over_one_slope": slope_ratio,
-            "continuous_ms": ms["continuous"], "flip_one_threshold_ms": ms["flip_1"],
-            "flip_continuous_ms": ms["flip_continuous"], "flow_geofence_ms": ms["flow_geofence"],
-            "flow_continuous_ms": ms["flow_continuous"]}
+    print(
+        f"flip-averaged (tta flip): one threshold {ms['flip_1']:.2f} ms ({ms['flip_1'] / binary[1]:.2f}x), "
+        f"continuous {ms['flip_continuous']:.2f} ms ({ms['flip_continuous'] / ms['continuous']:.2f}x)"
+    )
+    print(
+        f"flow baseline (DIS {flow.config.preset} + affine): geofence {ms['flow_geofence']:.2f} ms, "
+        f"continuous {ms['flow_continuous']:.2f} ms"
+    )
+    return {
+        "binary_ms": binary,
+        "extra_over_one": ratios,
+        "extra_over_one_slope": slope_ratio,
+        "continuous_ms": ms["continuous"],
+        "flip_one_threshold_ms": ms["flip_1"],
+        "flip_continuous_ms": ms["flip_continuous"],
+        "flow_geofence_ms": ms["flow_geofence"],
+        "flow_continuous_ms": ms["flow_continuous"],
+    }
 
 
 def run_backend_comparison(s: BenchSettings, estimators: dict) -> dict:
@@ -161,16 +176,27 @@ def run_backend_comparison(s: BenchSettings, estimators: dict) -> dict:
     for name in names:
         binary = {k: ms[f"{name}:{k}"] for k in s.thresholds}
         ratios, slope = extra_threshold_ratios(binary)
-        out[name] = {"binary_ms": binary, "continuous_ms": ms[f"{name}:continuous"], "extra_over_one": ratios,
-                     "extra_over_one_slope": slope}  # fmt: skip
-    print(f"{s.height_px}x{s.width_px} px, {s.threads} threads each, streaming, interleaved rounds "
-          f"({s.calls} timed calls per setting)")
-    head = f"{'K':>10}" + "".join(f"{n + ' ms':>16}" for n in names) + "".join(f"{n + '/' + base:>24}" for n in names[1:])
+        out[name] = {
+            "binary_ms": binary,
+            "continuous_ms": ms[f"{name}:continuous"],
+            "extra_over_one": ratios,
+            "extra_over_one_slope": slope,
+        }
+    print(
+        f"{s.height_px}x{s.width_px} px, {s.threads} threads each, streaming, interleaved rounds "
+        f"({s.calls} timed calls per setting)"
+    )
+    head = (
+        f"{'K':>10}" + "".join(f"{n + ' ms':>16}" for n in names) + "".join(f"{n + '/' + base:>24}" for n in names[1:])
+    )
     print(head)
     for k in [*s.thresholds, "continuous"]:
         key = "continuous_ms" if k == "continuous" else None
         vals = [out[n][key] if key else out[n]["binary_ms"][k] for n in names]
         print(f"{k!s:>10}" + "".join(f"{v:>16.2f}" for v in vals) + "".join(f"{v / vals[0]:>24.3f}" for v in vals[1:]))
-    print(f"{'extra/one':>10}" + "".join(f"{out[n]['extra_over_one_slope']:>16.3f}" for n in names)
-          + "   (least-squares slope over K, in units of one threshold)")  # fmt: skip
+    print(
+        f"{'extra/one':>10}"
+        + "".join(f"{out[n]['extra_over_one_slope']:>16.3f}" for n in names)
+        + "   (least-squares slope over K, in units of one threshold)"
+    )
     return out

@@ -22,9 +22,7 @@ from bittc_core.model import CONFIGS, BinaryTTCNet, ModelConfig, get_config
 from bittc_core.model.config import GROWTH_COUNTS, GROWTH_FLAGS, GROWTH_SWITCHES
 
 DEFAULT_WEIGHTS = Path(__file__).resolve().parent / "weights" / "bittc_default.pt"
-TRAIN_DEFAULT_HINT = (
-    "bash docs/train_default_weights.sh DATA_V1 DATA_V2 OUT (README: Training and the shipped weights)"
-)
+TRAIN_DEFAULT_HINT = "bash docs/train_default_weights.sh DATA_V1 DATA_V2 OUT (README: Training and the shipped weights)"
 REQUIRED_KEYS = ("config", "config_name", "state_dict", "train_meta")
 #: the release name of the shipped file (docs/releases.md), which predates names stored in
 #: checkpoints (``train_meta["release"]``)
@@ -52,8 +50,7 @@ def save_checkpoint(path: str | os.PathLike, payload: dict) -> None:
         raise
 
 
-def make_payload(net: BinaryTTCNet, config_name: str, train_meta: dict,
-                 train_state: dict | None = None) -> dict:
+def make_payload(net: BinaryTTCNet, config_name: str, train_meta: dict, train_state: dict | None = None) -> dict:
     payload = {
         "config": dataclasses.asdict(net.config),
         "config_name": config_name,
@@ -80,8 +77,9 @@ def release_name(ckpt: dict, path: str | os.PathLike) -> str | None:
     return name
 
 
-def load_checkpoint(path: str | os.PathLike, map_location: str | torch.device = "cpu",
-                    expected_config: str | None = None) -> dict:
+def load_checkpoint(
+    path: str | os.PathLike, map_location: str | torch.device = "cpu", expected_config: str | None = None
+) -> dict:
     """Load and validate. ``expected_config``: the registry name the caller needs."""
     path = Path(path)
     if not path.is_file():
@@ -91,8 +89,9 @@ def load_checkpoint(path: str | os.PathLike, map_location: str | torch.device = 
         ckpt = torch.load(path, map_location=map_location, weights_only=True)
     except Exception:  # pickle/zip errors of a truncated or foreign file
         # (torch's own message advises loading with weights_only=False: never for a checkpoint)
-        raise CheckpointError(f"{str(path)!r} is not a bittc checkpoint (unreadable: corrupt, truncated "
-                              "or another kind of file)") from None
+        raise CheckpointError(
+            f"{str(path)!r} is not a bittc checkpoint (unreadable: corrupt, truncated or another kind of file)"
+        ) from None
     if not isinstance(ckpt, dict) or any(k not in ckpt for k in REQUIRED_KEYS):
         raise CheckpointError(f"{str(path)!r} is not a bittc checkpoint (it lacks the keys {list(REQUIRED_KEYS)})")
     try:
@@ -108,11 +107,11 @@ def _check_config(ckpt: dict, path: str | os.PathLike, expected_config: str) -> 
     """A loaded checkpoint is of registry config ``expected_config``, by name and sizes."""
     name = ckpt["config_name"]
     if name != expected_config:
-        raise CheckpointError(f"checkpoint {str(path)!r} is of config {name!r}, "
-                              f"not {expected_config!r}")
+        raise CheckpointError(f"checkpoint {str(path)!r} is of config {name!r}, not {expected_config!r}")
     if expected_config in CONFIGS and CONFIGS[expected_config] != ckpt["model_config"]:
-        raise CheckpointError(f"checkpoint {str(path)!r} says config {name!r} but its "
-                              "sizes differ from the registered ones")
+        raise CheckpointError(
+            f"checkpoint {str(path)!r} says config {name!r} but its sizes differ from the registered ones"
+        )
 
 
 def build_network(ckpt: dict) -> BinaryTTCNet:
@@ -121,8 +120,9 @@ def build_network(ckpt: dict) -> BinaryTTCNet:
     try:
         net.load_state_dict(ckpt["state_dict"])
     except RuntimeError as err:
-        raise CheckpointError(f"checkpoint weights do not fit config "
-                              f"{ckpt['config_name']!r}: {str(err).splitlines()[0]}") from None
+        raise CheckpointError(
+            f"checkpoint weights do not fit config {ckpt['config_name']!r}: {str(err).splitlines()[0]}"
+        ) from None
     return net
 
 
@@ -141,17 +141,21 @@ def init_network(path: str | os.PathLike, config_name: str) -> BinaryTTCNet:
         _check_config(ckpt, path, config_name)
         return build_network(ckpt)
     if CONFIGS.get(name) != source or not grows_into(source, target):
-        raise CheckpointError(f"initial checkpoint {str(path)!r}: its config ({name!r}) is neither "
-                              f"{config_name!r} nor a config {config_name!r} grows from "
-                              "(the same sizes with fewer growth blocks, no global-context block or no "
-                              "correlation volume)")
+        raise CheckpointError(
+            f"initial checkpoint {str(path)!r}: its config ({name!r}) is neither "
+            f"{config_name!r} nor a config {config_name!r} grows from "
+            "(the same sizes with fewer growth blocks, no global-context block or no "
+            "correlation volume)"
+        )
     net = BinaryTTCNet(target)
     added = set(net.state_dict()) - set(BinaryTTCNet(source).state_dict())
     missing, unexpected = net.load_state_dict(ckpt["state_dict"], strict=False)
     # (batch norm fills in a missing num_batches_tracked itself, so it is never missing)
     if not set(missing) <= added or unexpected:
-        raise CheckpointError(f"initial checkpoint {str(path)!r}: weights do not fit config {config_name!r} "
-                              f"(missing {sorted(set(missing) - added)}, unexpected {unexpected})")
+        raise CheckpointError(
+            f"initial checkpoint {str(path)!r}: weights do not fit config {config_name!r} "
+            f"(missing {sorted(set(missing) - added)}, unexpected {unexpected})"
+        )
     return net
 
 
@@ -169,7 +173,7 @@ def grows_into(source: ModelConfig, target: ModelConfig) -> bool:
 
 
 def pick_device(name: str = "auto") -> torch.device:
-    """"auto" -> cuda when available, else cpu; "cpu"/"cuda" as asked."""
+    """ "auto" -> cuda when available, else cpu; "cpu"/"cuda" as asked."""
     if name == "auto":
         return torch.device("cuda" if torch.cuda.is_available() else "cpu")
     if name == "cuda" and not torch.cuda.is_available():

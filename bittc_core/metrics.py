@@ -69,8 +69,7 @@ def inside_geofence(eta: np.ndarray, eta_i: float) -> np.ndarray:
 def class_counts(pred: np.ndarray, truth: np.ndarray, mask: np.ndarray) -> np.ndarray:
     """(2, 2) [[intersection, union] of inside, [..] of outside] over ``mask``."""
     p, t = pred[mask], truth[mask]
-    return np.array([[np.sum(p & t), np.sum(p | t)], [np.sum(~p & ~t), np.sum(~p | ~t)]],
-                    dtype=np.int64)
+    return np.array([[np.sum(p & t), np.sum(p | t)], [np.sum(~p & ~t), np.sum(~p | ~t)]], dtype=np.int64)
 
 
 def two_class_iou(counts: np.ndarray) -> float:
@@ -143,9 +142,16 @@ class MetricAccumulator:
         """All thresholds [s] whose geofence maps ``add`` expects, in this order."""
         return np.concatenate([self.miou_thresholds_s, ERROR_RATE_TAUS_S])
 
-    def add(self, prob: np.ndarray, eta_hat: np.ndarray | None, eta: np.ndarray,
-            valid: np.ndarray, instance: np.ndarray, latency_ms: float | None = None,
-            ego_speed_mps: float | None = None) -> None:
+    def add(
+        self,
+        prob: np.ndarray,
+        eta_hat: np.ndarray | None,
+        eta: np.ndarray,
+        valid: np.ndarray,
+        instance: np.ndarray,
+        latency_ms: float | None = None,
+        ego_speed_mps: float | None = None,
+    ) -> None:
         """prob: (K, H, W) geofence probabilities for ``thresholds_s``; eta_hat: (H, W) or None;
         ego_speed_mps: the ego's speed at the latest frame [m/s], None where unknown."""
         if prob.shape[0] != len(self.thresholds_s):
@@ -189,13 +195,18 @@ class MetricAccumulator:
             if t == STATIC_ERROR_TAU_S:
                 static_pred, static_truth = pred[n + j], truth
         if ego_speed_mps is not None:
-            group = self._by_speed[EGO_SPEED_LABELS[int(np.searchsorted(EGO_SPEED_EDGES_MPS, ego_speed_mps, side="right"))]]
+            group = self._by_speed[
+                EGO_SPEED_LABELS[int(np.searchsorted(EGO_SPEED_EDGES_MPS, ego_speed_mps, side="right"))]
+            ]
             miou = image_miou(ious)
             if miou is not None:
                 group[0].append(miou)
             static = valid & (instance == 0)
-            group[1] += [np.sum(static_pred & ~static_truth & static), np.sum(~static_pred & static_truth & static),
-                         np.sum(static)]
+            group[1] += [
+                np.sum(static_pred & ~static_truth & static),
+                np.sum(~static_pred & static_truth & static),
+                np.sum(static),
+            ]
         if eta_hat is not None:  # valid = actor + static pixels, the MiD sums their parts
             for part, mask in (("actor", actors), ("static", valid & ~actors)):
                 s, c = mid_terms(eta_hat, eta, mask)
@@ -226,29 +237,46 @@ class MetricAccumulator:
             return float(np.mean(values)) if len(values) else nan
 
         per_threshold = np.array(self._iou_by_threshold, dtype=np.float64).reshape(-1, len(self.miou_thresholds_s))
-        by_threshold = {threshold_key(t): mean(col[np.isfinite(col)]) for t, col in zip(self.miou_thresholds_s, per_threshold.T)}
+        by_threshold = {
+            threshold_key(t): mean(col[np.isfinite(col)]) for t, col in zip(self.miou_thresholds_s, per_threshold.T)
+        }
         # false inside px: pixels predicted inside that are outside, per pair with a non-empty
         # inside union (in the "0" group: the stray pixels of an empty geofence)
-        by_share = {label: {"pairs": len(g[0]), "miou": mean(g[0]), "inside_iou": mean(g[1]),
-                            "pairs_with_inside_union": len(g[1]),
-                            "false_inside_px_median": float(np.median(g[2])) if g[2] else nan,
-                            "false_inside_px_p90": float(np.percentile(g[2], 90)) if g[2] else nan}
-                    for label, g in self._by_share.items()}
+        by_share = {
+            label: {
+                "pairs": len(g[0]),
+                "miou": mean(g[0]),
+                "inside_iou": mean(g[1]),
+                "pairs_with_inside_union": len(g[1]),
+                "false_inside_px_median": float(np.median(g[2])) if g[2] else nan,
+                "false_inside_px_p90": float(np.percentile(g[2], 90)) if g[2] else nan,
+            }
+            for label, g in self._by_share.items()
+        }
         mid = {f"mid_{part}": (s / c * MID_SCALE if c else nan) for part, (s, c) in self._mid_parts.items()}
         out = {"miou_by_threshold_s": by_threshold, "by_inside_share": by_share, **mid}
         errors, pixels = self._margin
         out["errors_by_margin_log_eta"] = {
-            label: {"share_of_errors": (e / errors.sum() if errors.sum() else nan),
-                    "error_rate": (e / p if p else nan), "share_of_pixels": (p / pixels.sum() if pixels.sum() else nan)}
-            for label, e, p in zip(margin_labels(), errors, pixels)}
+            label: {
+                "share_of_errors": (e / errors.sum() if errors.sum() else nan),
+                "error_rate": (e / p if p else nan),
+                "share_of_pixels": (p / pixels.sum() if pixels.sum() else nan),
+            }
+            for label, e, p in zip(margin_labels(), errors, pixels)
+        }
         images = [[image_miou(list(row)) for row in f] for f in self._forgiven]
         out["miou_forgiving_margin_log_eta"] = {
-            f"{m:g}": mean([x[j] for x in images if x[j] is not None]) for j, m in enumerate(FORGIVEN_MARGINS)}
+            f"{m:g}": mean([x[j] for x in images if x[j] is not None]) for j, m in enumerate(FORGIVEN_MARGINS)
+        }
         if any(len(g[0]) or g[1][2] for g in self._by_speed.values()):
             key = f"{STATIC_ERROR_TAU_S:g}s"
             out["by_ego_speed_mps"] = {
-                label: {"images": len(ious), "miou": mean(ious),
-                        f"static_false_inside_{key}": (fi / px if px else nan),
-                        f"static_missed_{key}": (mi / px if px else nan)}
-                for label, (ious, (fi, mi, px)) in self._by_speed.items()}
+                label: {
+                    "images": len(ious),
+                    "miou": mean(ious),
+                    f"static_false_inside_{key}": (fi / px if px else nan),
+                    f"static_missed_{key}": (mi / px if px else nan),
+                }
+                for label, (ious, (fi, mi, px)) in self._by_speed.items()
+            }
         return out

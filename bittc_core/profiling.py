@@ -27,8 +27,13 @@ def machine() -> dict:
             cpu = next((line.split(":", 1)[1].strip() for line in f if line.startswith("model name")), cpu)
     except OSError:
         pass
-    return {"platform": platform.platform(), "processor": cpu, "cpus": os.cpu_count(),
-            "python": platform.python_version(), "node": platform.node()}  # fmt: skip
+    return {
+        "platform": platform.platform(),
+        "processor": cpu,
+        "cpus": os.cpu_count(),
+        "python": platform.python_version(),
+        "node": platform.node(),
+    }
 
 
 def versions(backend: str) -> dict:

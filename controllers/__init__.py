@@ -34,8 +34,10 @@ def _load(entry: str, what: str):
     """'package.module:attr' (importable) or 'path/to/file.py:attr' -> the attribute."""
     module_name, sep, attr = entry.rpartition(":")
     if not sep or not module_name or not attr:
-        raise ConfigError(f"controller {what!r}: expected a registered name ({', '.join(REGISTRY)}), module:Class "
-                          "or path/to/file.py:Class")
+        raise ConfigError(
+            f"controller {what!r}: expected a registered name ({', '.join(REGISTRY)}), module:Class "
+            "or path/to/file.py:Class"
+        )
     if module_name.endswith(".py"):
         path = Path(module_name)
         if not path.is_file():
@@ -78,5 +80,16 @@ def make(name: str, **settings: Any) -> Controller:
     return ctrl
 
 
-__all__ = ["BrakeCommand", "Calibration", "Controller", "GeofenceView", "Observation", "OracleConfig",
-           "OracleController", "NoController", "REGISTRY", "ESTIMATOR_CONTROLLERS", "make"]
+__all__ = [
+    "BrakeCommand",
+    "Calibration",
+    "Controller",
+    "GeofenceView",
+    "Observation",
+    "OracleConfig",
+    "OracleController",
+    "NoController",
+    "REGISTRY",
+    "ESTIMATOR_CONTROLLERS",
+    "make",
+]

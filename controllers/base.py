@@ -31,8 +31,9 @@ from __future__ import annotations
 
 import math
 from abc import ABC, abstractmethod
+from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any, Mapping
+from typing import Any
 
 import numpy as np
 
@@ -67,11 +68,23 @@ class Calibration:
         return self.ego_length_m / 2 - self.mount_forward_m
 
     @classmethod
-    def from_camera(cls, camera, ego_size_m: tuple[float, ...]) -> "Calibration":
+    def from_camera(cls, camera, ego_size_m: tuple[float, ...]) -> Calibration:
         """From a ``sim.camera.CameraConfig`` and the ego's (length, width[, height]) [m]."""
         fx, fy, cx, cy = (float(x) for x in camera.intrinsics())
-        return cls(camera.width_px, camera.height_px, fx, fy, cx, cy, camera.mount_height_m, camera.mount_forward_m,
-                   camera.pitch_deg, camera.dt_s, float(ego_size_m[0]), float(ego_size_m[1]))
+        return cls(
+            camera.width_px,
+            camera.height_px,
+            fx,
+            fy,
+            cx,
+            cy,
+            camera.mount_height_m,
+            camera.mount_forward_m,
+            camera.pitch_deg,
+            camera.dt_s,
+            float(ego_size_m[0]),
+            float(ego_size_m[1]),
+        )
 
 
 @dataclass(frozen=True)
@@ -121,7 +134,7 @@ class Controller(ABC):
     num_alphas: int = 0  # thresholds evaluated per job (the K a latency profile charges)
     frame_stride: int = 1  # the pair is (frame k - frame_stride, frame k)
 
-    def reset(self, calibration: Calibration) -> None:
+    def reset(self, calibration: Calibration) -> None:  # noqa: B027 (an optional hook)
         """Forget any state from a previous run; ``calibration`` is this run's car."""
 
     @abstractmethod

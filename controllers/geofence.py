@@ -159,7 +159,8 @@ def estimator_thresholds(estimator, thresholds_s, frame_dt_s: float, frame_strid
             raise ConfigError(
                 f"frame interval {pair_dt_s:g} s ({frame_dt_s:g} s x stride {frame_stride}): threshold {t:g} s asks "
                 f"the estimator for {t_est:g} s at its trained {estimator.dt_s:g} s, outside its range "
-                f"[{lo:g}, {hi:g}] s")
+                f"[{lo:g}, {hi:g}] s"
+            )
     return thr_est
 
 
@@ -264,12 +265,18 @@ class GeofenceController(Controller):
             self._quiet = 0
             offset_s = self.cal.bumper_ahead_m / s  # camera plane -> bumper, static obstacle
             st = c.stages
-            reached = [tau_hat <= self._thr[nearest_log(self._thr, T + offset_s)] + 1e-9
-                       for T in (st.warn_ttc_s, st.partial_ttc_s, st.full_ttc_s)]
+            reached = [
+                tau_hat <= self._thr[nearest_log(self._thr, T + offset_s)] + 1e-9
+                for T in (st.warn_ttc_s, st.partial_ttc_s, st.full_ttc_s)
+            ]
             required = s / (2 * max(tau_hat - offset_s, 0.05))
             cmd = self._stages.update(*reached, required)
             stage = "full" if reached[2] else "partial" if reached[1] else "warn" if reached[0] else "fence"
-        tel = {"estimator_ms": round(est_ms, 3), "fence_fired_s": tau_hat if tau_hat is not None else "", "stage": stage}
+        tel = {
+            "estimator_ms": round(est_ms, 3),
+            "fence_fired_s": tau_hat if tau_hat is not None else "",
+            "stage": stage,
+        }
         for tau, n in zip(self._thr, sizes):
             tel[f"inpath_px_{tau:g}s"] = int(n)
         view = GeofenceView(tuple(float(t) for t in self._thr), maps, counted, corridor)
@@ -282,8 +289,15 @@ def _config(thresholds_s, frame_stride: int | None) -> GeofenceConfig:
     return GeofenceConfig(thresholds_s=thr, **({} if frame_stride is None else {"frame_stride": frame_stride}))
 
 
-def make_geofence(thresholds_s=None, weights: str | None = None, frame_stride: int | None = None, device: str = "cpu",
-                  name: str = "geofence", backend: str = "torch", onnx: str | None = None) -> GeofenceController:
+def make_geofence(
+    thresholds_s=None,
+    weights: str | None = None,
+    frame_stride: int | None = None,
+    device: str = "cpu",
+    name: str = "geofence",
+    backend: str = "torch",
+    onnx: str | None = None,
+) -> GeofenceController:
     """The shipped network (or ``weights``) behind the geofence controller; ``backend=
     "onnxruntime", onnx=DIR``: the same weights exported to ``DIR`` (checked against them)."""
     from bittc_core.checkpoint import DEFAULT_WEIGHTS

@@ -55,7 +55,11 @@ class StagedBrake:
         if full:
             demand = c.full_decel_mps2
         elif partial:
-            demand = c.full_decel_mps2 if required_decel_mps2 > c.required_decel_margin * c.partial_decel_mps2 else c.partial_decel_mps2
+            demand = (
+                c.full_decel_mps2
+                if required_decel_mps2 > c.required_decel_margin * c.partial_decel_mps2
+                else c.partial_decel_mps2
+            )
         self.level_mps2 = max(self.level_mps2, demand)
         return BrakeCommand(decel_mps2=self.level_mps2, warning=warn or self.level_mps2 > 0)
 

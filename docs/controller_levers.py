@@ -31,8 +31,17 @@ SETTINGS = {  # name -> GeofenceConfig overrides
     "persistence 3": {"persistence_frames": 3},
     "not nested": {"nested": False},
 }
-DEFAULT_CASES = ["CCRs", "CCRm", "CCRb", "cut-in", "benign-oncoming-truck", "benign-stationary-adjacent",
-                 "benign-free-road", "benign-parked-truck", "benign-follow-same-speed"]
+DEFAULT_CASES = [
+    "CCRs",
+    "CCRm",
+    "CCRb",
+    "cut-in",
+    "benign-oncoming-truck",
+    "benign-stationary-adjacent",
+    "benign-free-road",
+    "benign-parked-truck",
+    "benign-follow-same-speed",
+]
 
 
 def main() -> None:
@@ -53,8 +62,10 @@ def main() -> None:
         for t in thr:
             v = [s["fence_lag_s"][f"{t:g}"] for s in threats if s["fence_lag_s"].get(f"{t:g}") is not None]
             lags.append(f"{statistics.median(v):.2f}" if v else "-")
-        print(f"{name:<46}{sum(not s['collision'] for s in threats):>5}/{len(threats):<3}"
-              f"{sum(s['false_alarm'] for s in benign):>10}/{len(benign):<3}   {' / '.join(lags)}")
+        print(
+            f"{name:<46}{sum(not s['collision'] for s in threats):>5}/{len(threats):<3}"
+            f"{sum(s['false_alarm'] for s in benign):>10}/{len(benign):<3}   {' / '.join(lags)}"
+        )
 
 
 if __name__ == "__main__":

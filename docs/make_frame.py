@@ -38,8 +38,16 @@ def main() -> None:
     sim.close()
     over = ttc_overlay(frame.image, gt.tau_s, gt.valid, gt.instance)
     label = np.full((22, cam.width_px, 3), 255, np.uint8)
-    cv2.putText(label, f"exact TTC overlay: red 0 s -> green {TTC_MAX_S:g} s (static ground: tau = Z / v_ego)",
-                (6, 15), cv2.FONT_HERSHEY_SIMPLEX, 0.42, (0, 0, 0), 1, cv2.LINE_AA)  # fmt: skip
+    cv2.putText(
+        label,
+        f"exact TTC overlay: red 0 s -> green {TTC_MAX_S:g} s (static ground: tau = Z / v_ego)",
+        (6, 15),
+        cv2.FONT_HERSHEY_SIMPLEX,
+        0.42,
+        (0, 0, 0),
+        1,
+        cv2.LINE_AA,
+    )
     img = np.vstack([frame.image, over, label])
     tmp = args.out + ".tmp.png"
     cv2.imwrite(tmp, cv2.cvtColor(img, cv2.COLOR_RGB2BGR))

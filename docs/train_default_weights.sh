@@ -17,7 +17,7 @@
 # (the correlation volume, starting at zero), three more binary runs (the second and the
 # third with the correlation convs at 10x the learning rate, --lr-mult) and a frozen
 # continuous stage; then a fourth correlation run from that, keeping the weights of every
-# validation step (--keep-checkpoints), the mean of its last three (docs/average_weights.py)
+# validation step (--keep-checkpoints), the mean of its last three (bittc weights average)
 # and a last, shorter frozen continuous stage on that mean, whose best checkpoint ships.
 set -euo pipefail
 DATA=${1:-data/bittc_v1}
@@ -60,7 +60,7 @@ bittc train --data "$DATA2" --config cpu-small-corr --stage continuous --freeze-
 # the mean of the last three, and the frozen continuous stage on that mean
 CORR4_VAL=$((CORR4_STEPS / 4))
 bittc train --data "$DATA2" --config cpu-small-corr --stage binary --steps "$CORR4_STEPS" --seed 20 --lr 1e-4 --val-every "$CORR4_VAL" --val-limit 256 --lovasz-weight 0.5 --actor-weight 2 --lr-mult segnet.corr_=10 --keep-checkpoints --init "$OUT/continuous_corr.pt" --out "$OUT/corr4.pt"
-python docs/average_weights.py "$OUT/corr4_mean.pt" $(for k in 2 3 4; do printf '%s/corr4.binary.step%06d.pt ' "$OUT" $((k * CORR4_VAL)); done)
+bittc weights average $(for k in 2 3 4; do printf '%s/corr4.binary.step%06d.pt ' "$OUT" $((k * CORR4_VAL)); done) --out "$OUT/corr4_mean.pt"
 bittc train --data "$DATA2" --config cpu-small-corr --stage continuous --freeze-binary --steps "$CONT_MEAN_STEPS" --warmup-steps 50 --seed 0 --lr 2e-4 --val-every 125 --init "$OUT/corr4_mean.pt" --out "$OUT/continuous_mean.pt"
 # ship the continuous stage's best checkpoint (by val MiD; the binary part is the same in all)
 python -c "import sys; from bittc_core.checkpoint import load_checkpoint, release_payload, save_checkpoint

@@ -11,8 +11,6 @@ calibration; no ground truth).
 
 from __future__ import annotations
 
-import numpy as np
-
 from bittc_core.estimator import make_estimator
 from controllers import BrakeCommand, Calibration, Controller, Observation
 from controllers.road import corridor_columns, ground_ttc_per_row, static_depth_m
@@ -40,9 +38,14 @@ class DistanceKeeper(Controller):
         tau = self.threshold_s * self.estimator.dt_s / obs.dt_s  # the same eta at the estimator's interval
         inside = self.estimator.geofence(obs.image_prev, obs.image_latest, [tau])[0] > 0.5
         rows = ground_ttc_per_row(self.cal, obs.ego_speed_mps) > 1.25 * self.threshold_s
-        u0, u1 = corridor_columns(self.cal, self.cal.ego_width_m / 2, static_depth_m(self.cal, obs.ego_speed_mps, self.threshold_s))
+        u0, u1 = corridor_columns(
+            self.cal, self.cal.ego_width_m / 2, static_depth_m(self.cal, obs.ego_speed_mps, self.threshold_s)
+        )
         n = int(inside[rows][:, u0 : u1 + 1].sum()) if obs.ego_speed_mps > 1.0 else 0
         self.seen = self.seen + 1 if n >= self.min_px else 0
         self.braking |= self.seen >= 2
-        return BrakeCommand(decel_mps2=9.0 if self.braking else 0.0, warning=self.braking or self.seen >= 1,
-                            telemetry={"corridor_px": n})
+        return BrakeCommand(
+            decel_mps2=9.0 if self.braking else 0.0,
+            warning=self.braking or self.seen >= 1,
+            telemetry={"corridor_px": n},
+        )

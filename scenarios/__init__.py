@@ -34,7 +34,7 @@ SUITES: dict[str, str] = {
     "benign": "every benign scenario (no warning or brake expected)",
     "all": "every bundled case",
     "demo": "five cases that show the trade-off: CCRs-50, CCRm-50, CCRb-12m-6mps2, benign-oncoming, "
-            "benign-parked-truck",
+    "benign-parked-truck",
 }
 NCAP_FAMILIES = ("CCRs", "CCRs-offset", "CCRm", "CCRb")
 DEMO_CASES = ("CCRs-50", "CCRm-50", "CCRb-12m-6mps2", "benign-oncoming", "benign-parked-truck")

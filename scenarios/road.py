@@ -23,7 +23,9 @@ class RoadConfig:
 
     def __post_init__(self) -> None:
         if self.lanes_left < 0 or self.lanes_right < 0 or self.lanes_left + self.lanes_right > 6:
-            raise ValueError(f"RoadConfig lanes_left={self.lanes_left}, lanes_right={self.lanes_right}: need 0..6 in total")
+            raise ValueError(
+                f"RoadConfig lanes_left={self.lanes_left}, lanes_right={self.lanes_right}: need 0..6 in total"
+            )
         if not 2.5 <= self.lane_width_m <= 5.0:
             raise ValueError(f"RoadConfig.lane_width_m = {self.lane_width_m} outside [2.5, 5.0] m")
         if not self.x_end_m > self.x_start_m + self.segment_m:

@@ -78,9 +78,15 @@ def _one_case(scenario: str):
 class ScenarioEnv(gym.Env):
     metadata = {"render_modes": ["rgb_array"], "render_fps": 10}
 
-    def __init__(self, scenario: str = "CCRs-50", camera: CameraConfig | None = None, render_mode: str | None = None,
-                 textures: TextureStyle | None = None, latency: str | LatencyMode = "fixed:0",
-                 frame_stride: int = 1):  # fmt: skip
+    def __init__(
+        self,
+        scenario: str = "CCRs-50",
+        camera: CameraConfig | None = None,
+        render_mode: str | None = None,
+        textures: TextureStyle | None = None,
+        latency: str | LatencyMode = "fixed:0",
+        frame_stride: int = 1,
+    ):
         self.case = _one_case(scenario)
         self.camera = camera or CameraConfig()
         if textures is not None and not isinstance(textures, TextureStyle):
@@ -96,12 +102,14 @@ class ScenarioEnv(gym.Env):
         self.render_mode = render_mode
         self.metadata = {**self.metadata, "render_fps": self.camera.fps_hz}
         h, w = self.camera.height_px, self.camera.width_px
-        self.observation_space = spaces.Dict({
-            "image": spaces.Box(0, 255, (h, w, 3), np.uint8),
-            "image_prev": spaces.Box(0, 255, (h, w, 3), np.uint8),
-            "ego_speed_mps": spaces.Box(0.0, MAX_SPEED_MPS, (1,), np.float32),
-            "calibration": spaces.Box(-CALIBRATION_BOUND, CALIBRATION_BOUND, (8,), np.float32),
-        })  # fmt: skip
+        self.observation_space = spaces.Dict(
+            {
+                "image": spaces.Box(0, 255, (h, w, 3), np.uint8),
+                "image_prev": spaces.Box(0, 255, (h, w, 3), np.uint8),
+                "ego_speed_mps": spaces.Box(0.0, MAX_SPEED_MPS, (1,), np.float32),
+                "calibration": spaces.Box(-CALIBRATION_BOUND, CALIBRATION_BOUND, (8,), np.float32),
+            }
+        )
         self.action_space = spaces.Box(0.0, MAX_DECEL_MPS2, (1,), np.float32)
         self._sim: ScenarioSim | None = None
         self._loop: ClosedLoop | None = None
@@ -115,9 +123,12 @@ class ScenarioEnv(gym.Env):
         o = self._loop.observation(self._job)
         c = o.calibration
         calib = [c.fx_px, c.fy_px, c.cx_px, c.cy_px, c.mount_height_m, c.pitch_deg, c.bumper_ahead_m, c.ego_width_m]
-        return {"image": o.image_latest.copy(), "image_prev": o.image_prev.copy(),
-                "ego_speed_mps": np.array([min(o.ego_speed_mps, MAX_SPEED_MPS)], np.float32),
-                "calibration": np.array(calib, np.float32)}  # fmt: skip
+        return {
+            "image": o.image_latest.copy(),
+            "image_prev": o.image_prev.copy(),
+            "ego_speed_mps": np.array([min(o.ego_speed_mps, MAX_SPEED_MPS)], np.float32),
+            "calibration": np.array(calib, np.float32),
+        }
 
     def _info(self) -> dict:
         """Ground truth at the observed frame's capture, as plain dicts and arrays:
@@ -145,8 +156,9 @@ class ScenarioEnv(gym.Env):
         self.close()
         world_seed = int(self.np_random.integers(2**31 - 1))
         self._sim = ScenarioSim(self.case, self.camera, world_seed, render=True, textures=self.textures)
-        self._loop = ClosedLoop(self._sim, self.latency, num_alphas=self.num_alphas, pairs=True,
-                                frame_stride=self.frame_stride)  # fmt: skip
+        self._loop = ClosedLoop(
+            self._sim, self.latency, num_alphas=self.num_alphas, pairs=True, frame_stride=self.frame_stride
+        )
         self._charged_s = 0.0
         self._job = self._loop.reset()
         self._last = (self._obs(), self._info())
@@ -159,8 +171,10 @@ class ScenarioEnv(gym.Env):
             raise RuntimeError("the episode has ended: call reset()")
         a = np.asarray(action, dtype=np.float64).reshape(-1)
         if a.size != 1 or not np.isfinite(a[0]) or not 0.0 <= a[0] <= MAX_DECEL_MPS2:
-            raise ValueError(f"action {np.asarray(action).tolist()!r}: expected one finite deceleration in "
-                             f"[0, {MAX_DECEL_MPS2:g}] m/s^2")
+            raise ValueError(
+                f"action {np.asarray(action).tolist()!r}: expected one finite deceleration in "
+                f"[0, {MAX_DECEL_MPS2:g}] m/s^2"
+            )
         had_collision = self._sim.collision is not None
         brake0 = self._loop.brake_integral
         job = self._loop.submit(BrakeCommand(float(a[0])), self._charged_s, who="agent")
@@ -212,11 +226,13 @@ class GeofenceObservation(gym.Wrapper):
         self._thr_est = estimator_thresholds(self.estimator, thr, base.camera.dt_s, base.frame_stride)
         base.num_alphas = len(thr)
         k, h, w = len(thr), base.camera.height_px, base.camera.width_px
-        self.observation_space = spaces.Dict({
-            **env.observation_space.spaces,
-            "geofence": spaces.Box(0.0, 1.0, (k, h, w), np.float32),
-            "thresholds_s": spaces.Box(0.0, float(max(thr)), (k,), np.float32),
-        })  # fmt: skip
+        self.observation_space = spaces.Dict(
+            {
+                **env.observation_space.spaces,
+                "geofence": spaces.Box(0.0, 1.0, (k, h, w), np.float32),
+                "thresholds_s": spaces.Box(0.0, float(max(thr)), (k,), np.float32),
+            }
+        )
 
     def _augment(self, obs: dict) -> dict:
         t0 = time.perf_counter()

@@ -1,6 +1,6 @@
 """A scenario run: highway-env traffic, the PyBullet camera, ground truth, step by step.
 
-Time: the traffic is integrated at ``SIM_DT_S`` (100 Hz); the camera captures a frame
+Time: the traffic is integrated at ``sim.stepping.SIM_DT_S`` (100 Hz); the camera captures a frame
 every ``camera.dt_s``; a controller decides once per frame. Frame k is captured at
 t = k * camera.dt_s; its ground truth compares it with frame k-1.
 """
@@ -14,13 +14,13 @@ import numpy as np
 
 from scenarios.spec import ActorSpec, ScenarioCase
 from sim.actor_truth import ActorTruth, actor_truth, footprint_distance
-from sim.camera import CameraConfig, cam_T_ego
-from sim.ground_truth import GroundTruth, body_motions, camera_pose, compute_ground_truth
+from sim.camera import CameraConfig
+from sim.ground_truth import GroundTruth
+from sim.stepping import capture_pose, pair_ground_truth, step_traffic, substeps
 from sim.textures import TextureStyle
 from sim.traffic import ActuatorConfig, EgoVehicle, ScriptedVehicle, TrafficVehicle, build_road
 from sim.vehicles import EGO_SIZE_M, VehicleSpec, footprint_corners, footprints_overlap, sample_spec
 
-SIM_DT_S = 0.01  # traffic integration step [s]
 STANDSTILL_MPS = 0.01  # [m/s]
 POST_COLLISION_S = 1.0  # a run ends this long after the first contact [s] (Euro NCAP)
 VIEW_MARGIN_M = 250.0  # road built this far beyond the furthest vehicle [m]
@@ -95,8 +95,15 @@ class ScenarioSim:
         textures: the rendered world's ground and vehicle texture styles.
     """
 
-    def __init__(self, case: ScenarioCase, camera: CameraConfig, seed: int, render: bool, actuator: ActuatorConfig | None = None,
-                 textures: TextureStyle = TextureStyle()):  # fmt: skip
+    def __init__(
+        self,
+        case: ScenarioCase,
+        camera: CameraConfig,
+        seed: int,
+        render: bool,
+        actuator: ActuatorConfig | None = None,
+        textures: TextureStyle = TextureStyle(),
+    ):
         self.case = case
         self.camera = camera
         self.textures = textures
@@ -104,8 +111,7 @@ class ScenarioSim:
         self.render_enabled = render
         self.actuator = actuator or ActuatorConfig()
         self.rng = np.random.default_rng(seed)
-        self.n_sub = max(1, int(round(camera.dt_s / SIM_DT_S)))
-        self.sim_dt_s = camera.dt_s / self.n_sub
+        self.n_sub, self.sim_dt_s = substeps(camera.dt_s)
         self.world = None
         self._build()
 
@@ -136,9 +142,18 @@ class ScenarioSim:
             lc = None
             if a.lane_change is not None:
                 lc = (a.lane_change.start_s, a.lane_change.duration_s, road.lane_center_y_m(a.lane_change.to_lane))
-            veh = ScriptedVehicle(self.road, x, y, heading, a.speed_kph / 3.6, spec.length_m, spec.width_m,
-                                  accel_mps2=-a.decel_mps2 if a.decel_mps2 > 0 else a.accel_mps2,
-                                  brake_onset_s=a.brake_onset_s if a.decel_mps2 > 0 else 0.0, lane_change=lc)  # fmt: skip
+            veh = ScriptedVehicle(
+                self.road,
+                x,
+                y,
+                heading,
+                a.speed_kph / 3.6,
+                spec.length_m,
+                spec.width_m,
+                accel_mps2=-a.decel_mps2 if a.decel_mps2 > 0 else a.accel_mps2,
+                brake_onset_s=a.brake_onset_s if a.decel_mps2 > 0 else 0.0,
+                lane_change=lc,
+            )
             self._add_actor(spec, veh)
         self._add_background_traffic(v_ego)
 
@@ -180,8 +195,15 @@ class ScenarioSim:
     def actor_truths(self) -> list[ActorTruth]:
         ego_pose = self.ego.world_pose()
         return [
-            actor_truth(a.instance, ego_pose, EGO_SIZE_M[:2], float(self.ego.speed), a.vehicle.world_pose(),
-                        (a.spec.length_m, a.spec.width_m), a.vehicle.world_velocity())  # fmt: skip
+            actor_truth(
+                a.instance,
+                ego_pose,
+                EGO_SIZE_M[:2],
+                float(self.ego.speed),
+                a.vehicle.world_pose(),
+                (a.spec.length_m, a.spec.width_m),
+                a.vehicle.world_velocity(),
+            )
             for a in self.actors
         ]
 
@@ -209,10 +231,7 @@ class ScenarioSim:
 
     # ------------------------------------------------------------------ camera
     def _camera_pose(self) -> np.ndarray:
-        jitter = (0.0, 0.0, 0.0)
-        if self.camera.jitter_deg > 0:
-            jitter = tuple(self.rng.normal(0.0, self.camera.jitter_deg, 3))
-        return camera_pose(cam_T_ego(self.camera, jitter), self.ego.world_pose())
+        return capture_pose(self.camera, self.rng, self.ego.world_pose())
 
     def capture(self) -> Frame:
         """Render the current state (poses mirrored into PyBullet first)."""
@@ -226,9 +245,16 @@ class ScenarioSim:
         return Frame(self.t_s, r.rgb, cam_T_world, poses, r.depth_m, r.instance)
 
     def ground_truth(self, prev: Frame, latest: Frame) -> GroundTruth:
-        motions = body_motions(prev.poses, latest.poses)
-        return compute_ground_truth(latest.depth_m, latest.instance, self.camera.K(), latest.cam_T_world, prev.cam_T_world,
-                                    motions, latest.t_s - prev.t_s, self.camera.far_m)  # fmt: skip
+        return pair_ground_truth(
+            self.camera,
+            latest.depth_m,
+            latest.instance,
+            latest.cam_T_world,
+            prev.cam_T_world,
+            latest.poses,
+            prev.poses,
+            latest.t_s - prev.t_s,
+        )
 
     # ------------------------------------------------------------------ stepping
     def reset(self) -> StepTruth:
@@ -242,11 +268,7 @@ class ScenarioSim:
         """Integrate one traffic step with a requested ego deceleration [m/s^2]."""
         dt = self.sim_dt_s
         if self.collision is None:
-            self.ego.command(decel_mps2, dt)
-            for a in self.actors:
-                a.vehicle.command(self.t_s, dt)
-            for v in self.road.vehicles:
-                v.step(dt)
+            step_traffic(self.road, self.ego, [a.vehicle for a in self.actors], decel_mps2, self.t_s, dt)
         self.t_s = round(self.t_s + dt, 9)
         self.ego_braked |= self.ego.current_accel_mps2 < -0.5
         if self.collision is None:
@@ -274,8 +296,14 @@ class ScenarioSim:
         still_closing = truth.critical is not None and truth.critical.closing_speed_mps > 1e-6
         if self.case.ego.speed_kph > 0 and self.ego.speed < STANDSTILL_MPS and not still_closing:
             return "standstill"
-        if self.ego_braked and truth.critical is None or (
-            self.ego_braked and truth.critical.closing_speed_mps < 0 and self._actor(truth.critical.instance).vehicle.current_accel_mps2 >= 0
+        if (
+            self.ego_braked
+            and truth.critical is None
+            or (
+                self.ego_braked
+                and truth.critical.closing_speed_mps < 0
+                and self._actor(truth.critical.instance).vehicle.current_accel_mps2 >= 0
+            )
         ):
             return "resolved"
         if self.t_s >= self.case.duration_s - 1e-9:

@@ -44,7 +44,9 @@ class FenceLagMeter:
 
     def lag_s(self) -> dict[str, float | None]:
         """'<tau_i>' -> tau_i - tau* [s], None for a fence that never covered the actor."""
-        return {f"{t:g}": (round(t - self.cover_ttc_s[t], 4) if t in self.cover_ttc_s else None) for t in self.thresholds_s}
+        return {
+            f"{t:g}": (round(t - self.cover_ttc_s[t], 4) if t in self.cover_ttc_s else None) for t in self.thresholds_s
+        }
 
     def cover_ttc(self) -> dict[str, float | None]:
         return {f"{t:g}": (round(self.cover_ttc_s[t], 4) if t in self.cover_ttc_s else None) for t in self.thresholds_s}

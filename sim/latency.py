@@ -74,14 +74,19 @@ def load_profiles(path: Path = PROFILES_FILE) -> dict[str, DeviceProfile]:
     out = {}
     for name, d in raw.items():
         if not isinstance(d, dict) or set(d) - _PROFILE_KEYS or not {"a_ms", "b_ms", "source", "measured"} <= set(d):
-            raise LatencyError(f"{path}: profile {name!r} needs exactly the keys {sorted(_PROFILE_KEYS)} "
-                               f"(continuous_ms optional), got {d!r}")
+            raise LatencyError(
+                f"{path}: profile {name!r} needs exactly the keys {sorted(_PROFILE_KEYS)} "
+                f"(continuous_ms optional), got {d!r}"
+            )
         for key in ("a_ms", "b_ms", "continuous_ms"):
             v = d.get(key)
-            if key in d and not (isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) and v >= 0):
+            if key in d and not (
+                isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) and v >= 0
+            ):
                 raise LatencyError(f"{path}: profile {name!r}: {key} = {v!r} must be a finite number >= 0")
-        out[str(name)] = DeviceProfile(str(name), float(d["a_ms"]), float(d["b_ms"]), str(d["source"]),
-                                       bool(d["measured"]), d.get("continuous_ms"))
+        out[str(name)] = DeviceProfile(
+            str(name), float(d["a_ms"]), float(d["b_ms"]), str(d["source"]), bool(d["measured"]), d.get("continuous_ms")
+        )
     return out
 
 

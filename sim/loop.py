@@ -25,17 +25,17 @@ from __future__ import annotations
 
 import math
 import time
+from collections import defaultdict
+from collections.abc import Callable
+from dataclasses import dataclass, field
 
 import cv2
-from collections import defaultdict
-from dataclasses import dataclass, field
-from typing import Callable
 
 from controllers.base import BrakeCommand, Calibration, Controller, Observation
 from sim.episode import Frame, ScenarioSim, StepTruth
 from sim.fence_lag import FenceLagMeter
 from sim.ground_truth import GroundTruth
-from sim.latency import CommandQueue, Job, LatencyMode, TIME_EPS_S, next_job
+from sim.latency import TIME_EPS_S, CommandQueue, Job, LatencyMode, next_job
 from sim.vehicles import EGO_SIZE_M
 
 cv2.setNumThreads(1)  # OpenCV's own pool would contend with the estimator's torch threads
@@ -71,9 +71,17 @@ class ClosedLoop:
         lag_meter: measures the fence lag of the critical actor from each job's geofences.
     """
 
-    def __init__(self, sim: ScenarioSim, latency: LatencyMode, *, num_alphas: int = 0, pairs: bool = False,
-                 frame_stride: int = 1, on_capture: Callable[[FrameRecord, Frame], None] | None = None,
-                 lag_meter: FenceLagMeter | None = None) -> None:  # fmt: skip
+    def __init__(
+        self,
+        sim: ScenarioSim,
+        latency: LatencyMode,
+        *,
+        num_alphas: int = 0,
+        pairs: bool = False,
+        frame_stride: int = 1,
+        on_capture: Callable[[FrameRecord, Frame], None] | None = None,
+        lag_meter: FenceLagMeter | None = None,
+    ) -> None:
         if not isinstance(frame_stride, int) or frame_stride < 1:
             raise ValueError(f"frame_stride = {frame_stride!r}: must be an integer >= 1")
         self.sim = sim
@@ -108,9 +116,14 @@ class ClosedLoop:
         rec = self.records[job.frame]
         latest = self._frames.get(job.frame)
         prev = self._frames.get(job.frame - self.stride) if self.pairs else None
-        return Observation(rec.t_s, rec.ego_speed_mps, latest.image if latest is not None else None,
-                           prev.image if prev is not None else None, self.stride * self.frame_dt_s,
-                           self.calibration)  # fmt: skip
+        return Observation(
+            rec.t_s,
+            rec.ego_speed_mps,
+            latest.image if latest is not None else None,
+            prev.image if prev is not None else None,
+            self.stride * self.frame_dt_s,
+            self.calibration,
+        )
 
     def truth_at(self, job: Job) -> StepTruth:
         """Ground truth at the job's capture (for oracles, ``info`` and traces only)."""
@@ -207,8 +220,14 @@ class ClosedLoop:
         t0 = time.perf_counter()
         frame = sim.capture()
         self.timing["render_s"] += time.perf_counter() - t0
-        rec = FrameRecord(len(self.records), sim.t_s, float(sim.ego.speed), float(sim.ego.current_accel_mps2),
-                          self.truth, self.queue.active)  # fmt: skip
+        rec = FrameRecord(
+            len(self.records),
+            sim.t_s,
+            float(sim.ego.speed),
+            float(sim.ego.current_accel_mps2),
+            self.truth,
+            self.queue.active,
+        )
         self.records.append(rec)
         self._frames[rec.index] = frame
         for k in [k for k in self._frames if k < rec.index - self.stride - 1]:

@@ -38,8 +38,9 @@ OPTIONAL = ("continuous_ms", "fit", "weights", "machine", "versions")
 
 def _number(path, key: str, v, *, positive: bool = False) -> float:
     if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v < 0 or (positive and v == 0):
-        raise LatencyError(f"profile file {str(path)!r}: {key} = {v!r} must be a finite number "
-                           f"{'> 0' if positive else '>= 0'}")  # fmt: skip
+        raise LatencyError(
+            f"profile file {str(path)!r}: {key} = {v!r} must be a finite number {'> 0' if positive else '>= 0'}"
+        )
     return float(v)
 
 
@@ -56,7 +57,9 @@ def read_profile_file(path: str | Path, name: str | None = None) -> DeviceProfil
         raise LatencyError(f"profile file {str(path)!r}: expected a mapping of keys, got {type(raw).__name__}")
     unknown = sorted(set(map(str, raw)) - set(REQUIRED) - set(OPTIONAL))
     if unknown:
-        raise LatencyError(f"profile file {str(path)!r}: unknown key(s) {unknown}; known: {sorted(REQUIRED + OPTIONAL)}")
+        raise LatencyError(
+            f"profile file {str(path)!r}: unknown key(s) {unknown}; known: {sorted(REQUIRED + OPTIONAL)}"
+        )
     missing = [k for k in REQUIRED if k not in raw]
     if missing:
         raise LatencyError(f"profile file {str(path)!r}: missing key(s) {missing}")
@@ -65,11 +68,14 @@ def read_profile_file(path: str | Path, name: str | None = None) -> DeviceProfil
     timings = raw["timings_ms"]
     binary = timings.get("binary") if isinstance(timings, dict) else None
     if not isinstance(binary, dict) or len(binary) < 2:
-        raise LatencyError(f"profile file {str(path)!r}: timings_ms.binary needs the timings of at least two K "
-                           f"values, got {binary!r}")  # fmt: skip
+        raise LatencyError(
+            f"profile file {str(path)!r}: timings_ms.binary needs the timings of at least two K values, got {binary!r}"
+        )
     for k, t in binary.items():
         if isinstance(k, bool) or not isinstance(k, int) or k < 1:
-            raise LatencyError(f"profile file {str(path)!r}: timings_ms.binary has K = {k!r}; K must be an integer >= 1")
+            raise LatencyError(
+                f"profile file {str(path)!r}: timings_ms.binary has K = {k!r}; K must be an integer >= 1"
+            )
         _number(path, f"timings_ms.binary[{k}]", t, positive=True)
     if not isinstance(raw["measured"], bool):
         raise LatencyError(f"profile file {str(path)!r}: measured = {raw['measured']!r} must be true or false")
@@ -94,7 +100,8 @@ def write_profile_file(path: str | Path, doc: dict) -> None:
     from bittc_core.atomic import write_text_atomic
 
     text = "# made by `bittc profile`; read by `--latency profile:FILE` (sim.profile_file)\n" + yaml.safe_dump(
-        doc, sort_keys=False, width=100)  # fmt: skip
+        doc, sort_keys=False, width=100
+    )
     parsed = yaml.safe_load(text)
     missing = [k for k in REQUIRED if k not in parsed]
     if missing or set(parsed) - set(REQUIRED) - set(OPTIONAL):

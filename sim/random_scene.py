@@ -13,9 +13,10 @@ from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 
-from sim.camera import CameraConfig, cam_T_ego
-from sim.ground_truth import GroundTruth, body_motions, camera_pose, compute_ground_truth
+from sim.camera import CameraConfig
+from sim.ground_truth import GroundTruth
 from sim.scenery import RoadConfig
+from sim.stepping import capture_pose, pair_ground_truth, step_traffic, substeps
 from sim.textures import TextureBank
 from sim.traffic import ActuatorConfig, EgoVehicle, ScriptedVehicle, build_road
 from sim.vehicles import EGO_SIZE_M, footprint_corners, footprints_overlap, sample_spec
@@ -27,13 +28,12 @@ X_RANGE_M = (6.0, 120.0)  # distance ahead of the ego [m]
 CLASSES = ("car", "car", "car", "gvt", "van", "truck")
 MAX_ACTORS = 12
 EGO_MAX_SPEED_MPS = 130 / 3.6  # [m/s]
-SIM_DT_S = 0.01  # [s]
 # braking cases ahead (``ahead_share``): what a collision-warning camera must fence on time
 AHEAD_MOTIONS = ("stationary", "slower", "braking")
 AHEAD_CLASSES = ("gvt", "car", "van", "truck")
 AHEAD_TTC_RANGE_S = (0.3, 4.0)  # [s] bumper-to-bumper TTC at the first frame, log-uniform
 AHEAD_OVERLAP = (0.25, 1.0)  # |share of the ego's width overlapped|, either side (Euro NCAP: 50-100 %)
-AHEAD_EGO_SPEED_MPS = (10 / 3.6, 130 / 3.6)  # [m/s]
+AHEAD_EGO_SPEED_MPS = (10 / 3.6, EGO_MAX_SPEED_MPS)  # [m/s]
 AHEAD_MAX_OTHER_ACTORS = 6
 
 
@@ -133,8 +133,14 @@ def _ahead_actor(rng: np.random.Generator, v_ego: float, length_m: float, width_
     return EGO_SIZE_M[0] / 2 + gap + length_m / 2, y, 0.0, speed, accel, f"ahead-{motion}"
 
 
-def render_clip(sample_seed: int, base_camera: CameraConfig, clip_length: int, bank: TextureBank,
-                world: World | None = None, ahead_share: float = 0.0) -> Clip:
+def render_clip(
+    sample_seed: int,
+    base_camera: CameraConfig,
+    clip_length: int,
+    bank: TextureBank,
+    world: World | None = None,
+    ahead_share: float = 0.0,
+) -> Clip:
     """Draw a scene from ``sample_seed`` and render ``clip_length`` frames of it.
 
     ``world``: a world built on ``bank`` to rebuild in place (``World.reset``) instead of
@@ -155,8 +161,7 @@ def render_clip(sample_seed: int, base_camera: CameraConfig, clip_length: int, b
     if ahead:
         v_ego = float(rng.uniform(*AHEAD_EGO_SPEED_MPS))
     hw_road = build_road(road, seed=sample_seed % (2**31))
-    n_sub = max(1, int(round(camera.dt_s / SIM_DT_S)))
-    sim_dt = camera.dt_s / n_sub
+    n_sub, sim_dt = substeps(camera.dt_s)
     ego = EgoVehicle(hw_road, 0.0, 0.0, v_ego, EGO_SIZE_M[0], EGO_SIZE_M[1], ActuatorConfig(delay_s=0.0), sim_dt)
     hw_road.vehicles.append(ego)
     world_seed = int(rng.integers(2**31))
@@ -186,7 +191,9 @@ def render_clip(sample_seed: int, base_camera: CameraConfig, clip_length: int, b
             else:
                 continue
             taken.append(corners)
-            veh = ScriptedVehicle(hw_road, x, y, heading, speed, spec.length_m, spec.width_m, accel_mps2=accel, keep_lateral=keep)
+            veh = ScriptedVehicle(
+                hw_road, x, y, heading, speed, spec.length_m, spec.width_m, accel_mps2=accel, keep_lateral=keep
+            )
             hw_road.vehicles.append(veh)
             actors.append((world.add_vehicle(spec), spec, veh, motion))
         images, frames, states = [], [], []
@@ -194,33 +201,37 @@ def render_clip(sample_seed: int, base_camera: CameraConfig, clip_length: int, b
         for k in range(clip_length):
             if k > 0:
                 for _ in range(n_sub):
-                    ego.command(ego_decel, sim_dt)
-                    for _, _, veh, _ in actors:
-                        veh.command(t, sim_dt)
-                    for v in hw_road.vehicles:
-                        v.step(sim_dt)
+                    step_traffic(hw_road, ego, [veh for _, _, veh, _ in actors], ego_decel, t, sim_dt)
                     t += sim_dt
             poses = {inst: veh.world_pose() for inst, _, veh, _ in actors}
             for inst, pose in poses.items():
                 world.set_vehicle_pose(inst, *pose)
-            jitter = tuple(rng.normal(0.0, camera.jitter_deg, 3)) if camera.jitter_deg > 0 else (0.0, 0.0, 0.0)
             ex, ey, eh = ego.world_pose()
-            cam_T_world = camera_pose(cam_T_ego(camera, jitter), (ex, ey, eh))
+            cam_T_world = capture_pose(camera, rng, (ex, ey, eh))
             r = world.render(cam_T_world)
             images.append(r.rgb)
             frames.append((r, cam_T_world, poses))
-            states.append({
-                "t_s": round(t, 6),
-                "cam_T_world": np.round(cam_T_world, 12).tolist(),
-                "ego": {"x_m": ex, "y_m": ey, "heading_rad": eh, "speed_mps": float(ego.speed)},
-                "actors": [{"instance": inst, "x_m": poses[inst][0], "y_m": poses[inst][1], "heading_rad": poses[inst][2],
-                            "speed_mps": float(veh.speed)} for inst, _, veh, _ in actors],
-            })  # fmt: skip
+            states.append(
+                {
+                    "t_s": round(t, 6),
+                    "cam_T_world": np.round(cam_T_world, 12).tolist(),
+                    "ego": {"x_m": ex, "y_m": ey, "heading_rad": eh, "speed_mps": float(ego.speed)},
+                    "actors": [
+                        {
+                            "instance": inst,
+                            "x_m": poses[inst][0],
+                            "y_m": poses[inst][1],
+                            "heading_rad": poses[inst][2],
+                            "speed_mps": float(veh.speed),
+                        }
+                        for inst, _, veh, _ in actors
+                    ],
+                }
+            )
         gts = []
         for j in range(1, clip_length):
-            (r0, c0, p0), (r1, c1, p1) = frames[j - 1], frames[j]
-            motions = body_motions(p0, p1)
-            gts.append(compute_ground_truth(r1.depth_m, r1.instance, camera.K(), c1, c0, motions, camera.dt_s, camera.far_m))
+            (_, c0, p0), (r1, c1, p1) = frames[j - 1], frames[j]
+            gts.append(pair_ground_truth(camera, r1.depth_m, r1.instance, c1, c0, p1, p0, camera.dt_s))
     finally:
         if owned:
             world.close()
@@ -232,9 +243,18 @@ def render_clip(sample_seed: int, base_camera: CameraConfig, clip_length: int, b
         "camera": asdict(camera),
         "road": asdict(road),
         "ego_decel_mps2": ego_decel,
-        "actors": [{"instance": inst, "kind": spec.kind, "length_m": spec.length_m, "width_m": spec.width_m,
-                    "height_m": spec.height_m, "palette_index": spec.palette_index, "motion": motion}
-                   for inst, spec, _, motion in actors],
+        "actors": [
+            {
+                "instance": inst,
+                "kind": spec.kind,
+                "length_m": spec.length_m,
+                "width_m": spec.width_m,
+                "height_m": spec.height_m,
+                "palette_index": spec.palette_index,
+                "motion": motion,
+            }
+            for inst, spec, _, motion in actors
+        ],
         "frames": states,
-    }  # fmt: skip
+    }
     return Clip(images, gts, meta)

@@ -22,6 +22,7 @@ import yaml
 
 from bittc_core.atomic import write_text_atomic
 from controllers.base import Controller
+from controllers.stages import MAX_DECEL_MPS2
 from scenarios.spec import ScenarioCase
 from sim.camera import CameraConfig
 from sim.episode import ScenarioSim
@@ -33,12 +34,34 @@ from sim.traffic import ActuatorConfig
 from sim.video import VideoWriter, hud, ttc_overlay
 
 SUMMARY_KEYS = (
-    "scenario", "family", "controller", "seed", "threat", "collision", "impact_speed_kph",
-    "relative_impact_speed_kph", "speed_reduction_kph", "min_gap_m", "t_first_warning_s",
-    "ttc_at_first_warning_s", "t_first_brake_s", "ttc_at_first_brake_s", "false_alarm",
-    "end_reason", "steps", "sim_time_s", "num_alphas", "thresholds_s", "latency_mode", "latency_ms_mean",
-    "latency_ms_p95", "wait_ms_mean", "actuator_delay_ms", "frames_processed", "frames_skipped",
-)  # fmt: skip
+    "scenario",
+    "family",
+    "controller",
+    "seed",
+    "threat",
+    "collision",
+    "impact_speed_kph",
+    "relative_impact_speed_kph",
+    "speed_reduction_kph",
+    "min_gap_m",
+    "t_first_warning_s",
+    "ttc_at_first_warning_s",
+    "t_first_brake_s",
+    "ttc_at_first_brake_s",
+    "false_alarm",
+    "end_reason",
+    "steps",
+    "sim_time_s",
+    "num_alphas",
+    "thresholds_s",
+    "latency_mode",
+    "latency_ms_mean",
+    "latency_ms_p95",
+    "wait_ms_mean",
+    "actuator_delay_ms",
+    "frames_processed",
+    "frames_skipped",
+)
 #: per threshold [s]: the critical actor's exact camera-plane TTC when the fence first covered half of it,
 #: and the fence's lag (threshold minus that TTC); see sim.fence_lag
 LAG_KEYS = ("fence_cover_ttc_s", "fence_lag_s")
@@ -78,16 +101,37 @@ def run_case(
     if writer is not None:
         scale = writer.scale_for(camera.width_px)
         hook = lambda rec, frame: writer.write(_video_frame(frame, rec, loop, scale))  # noqa: E731
-    loop = ClosedLoop(sim, latency, num_alphas=controller.num_alphas, pairs=controller.needs_camera,
-                      frame_stride=controller.frame_stride, on_capture=hook, lag_meter=lag)  # fmt: skip
+    loop = ClosedLoop(
+        sim,
+        latency,
+        num_alphas=controller.num_alphas,
+        pairs=controller.needs_camera,
+        frame_stride=controller.frame_stride,
+        on_capture=hook,
+        lag_meter=lag,
+    )
     try:
         loop.drive(controller)
         summary = summarize(case, controller, seed, loop, latency, lag)
         if out_dir is not None:
-            timing = {"wall_time_s": round(time.perf_counter() - wall0, 3),
-                      **{k: round(v, 4) for k, v in sorted(loop.timing.items())}}  # fmt: skip
-            _write_outputs(out_dir, case, controller, camera, seed, sim.actuator, summary, _trace_rows(loop), video,
-                           textures, latency, timing)  # fmt: skip
+            timing = {
+                "wall_time_s": round(time.perf_counter() - wall0, 3),
+                **{k: round(v, 4) for k, v in sorted(loop.timing.items())},
+            }
+            _write_outputs(
+                out_dir,
+                case,
+                controller,
+                camera,
+                seed,
+                sim.actuator,
+                summary,
+                _trace_rows(loop),
+                video,
+                textures,
+                latency,
+                timing,
+            )
             if writer is not None:
                 writer.close()
         return summary
@@ -104,8 +148,14 @@ def default_latency(controller: Controller) -> LatencyMode:
     return parse_latency("measured" if controller.needs_camera else "fixed:0")
 
 
-def summarize(case: ScenarioCase, controller: Controller, seed: int, loop: ClosedLoop, latency: LatencyMode,
-              lag: FenceLagMeter | None) -> dict:  # fmt: skip
+def summarize(
+    case: ScenarioCase,
+    controller: Controller,
+    seed: int,
+    loop: ClosedLoop,
+    latency: LatencyMode,
+    lag: FenceLagMeter | None,
+) -> dict:
     sim = loop.sim
     col = sim.collision
     first_warn, first_brake = loop.first_warning, loop.first_brake
@@ -194,7 +244,15 @@ def _video_frame(frame, rec, loop: ClosedLoop, scale: int) -> np.ndarray:
     crit = truth.critical
     ttc = f"{crit.ttc_s:.2f} s" if crit and math.isfinite(crit.ttc_s) else "inf"
     gap = f"{crit.gap_m:.1f} m" if crit else "-"
-    stage = "FULL BRAKE" if active.decel_mps2 >= 8.9 else "BRAKE" if active.decel_mps2 > 0 else "WARNING" if active.warning else "-"
+    stage = (
+        "FULL BRAKE"
+        if active.decel_mps2 >= MAX_DECEL_MPS2 - 0.1
+        else "BRAKE"
+        if active.decel_mps2 > 0
+        else "WARNING"
+        if active.warning
+        else "-"
+    )
     last = next((r for r in reversed(loop.records) if r.latency_s is not None), None)
     lat = f"{last.latency_s * 1e3:.0f} ms" if last is not None else "-"
     lines = [
@@ -205,8 +263,9 @@ def _video_frame(frame, rec, loop: ClosedLoop, scale: int) -> np.ndarray:
     return hud(img, lines, active.warning or active.decel_mps2 > 0)
 
 
-def _write_outputs(out_dir: Path, case, controller, camera, seed, actuator, summary, rows, video, textures, latency,
-                   timing) -> None:  # fmt: skip
+def _write_outputs(
+    out_dir: Path, case, controller, camera, seed, actuator, summary, rows, video, textures, latency, timing
+) -> None:
     out_dir.mkdir(parents=True, exist_ok=True)
     buf = io.StringIO()
     fieldnames = list(rows[0].keys()) if rows else ["t_s"]

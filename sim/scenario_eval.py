@@ -74,16 +74,23 @@ class CaseResult:
     would_warn: bool  # the controller's decisions (not applied) included a warning
 
 
-def evaluate_case(case: ScenarioCase, estimator, thresholds_s, camera: CameraConfig, seed: int = 0,
-                  frame_stride: int = 1) -> CaseResult:
+def evaluate_case(
+    case: ScenarioCase, estimator, thresholds_s, camera: CameraConfig, seed: int = 0, frame_stride: int = 1
+) -> CaseResult:
     """``frame_stride`` 1: consecutive frames, the estimator's own frame interval."""
     cfg = GeofenceConfig(thresholds_s=tuple(thresholds_s), frame_stride=frame_stride)
     probe = OpenLoopProbe(GeofenceController(estimator, cfg))
     sim = ScenarioSim(case, camera, seed, render=True)
     lag = FenceLagMeter()
     try:
-        loop = ClosedLoop(sim, parse_latency("fixed:0"), num_alphas=probe.num_alphas, pairs=True,
-                          frame_stride=frame_stride, lag_meter=lag)  # fmt: skip
+        loop = ClosedLoop(
+            sim,
+            parse_latency("fixed:0"),
+            num_alphas=probe.num_alphas,
+            pairs=True,
+            frame_stride=frame_stride,
+            lag_meter=lag,
+        )
         loop.drive(probe)
     finally:
         sim.close()
@@ -155,12 +162,23 @@ def summarize(results: list[CaseResult], thresholds_s) -> dict:
         "benign_would_warn": sum(r.would_warn for r in benign),
         "inside_share_by_tau": curve,
         "per_case": {
-            r.name: {"threat": r.threat, "ego_speed_kph": r.ego_speed_kph, "fence_lag_s": r.fence_lag_s,
-                     **({"stray_frames": r.stray_frames, "stray_max_run_frames": r.stray_max_run,
-                         "would_warn": r.would_warn} if not r.threat else {})}
+            r.name: {
+                "threat": r.threat,
+                "ego_speed_kph": r.ego_speed_kph,
+                "fence_lag_s": r.fence_lag_s,
+                **(
+                    {
+                        "stray_frames": r.stray_frames,
+                        "stray_max_run_frames": r.stray_max_run,
+                        "would_warn": r.would_warn,
+                    }
+                    if not r.threat
+                    else {}
+                ),
+            }
             for r in results
         },
-    }  # fmt: skip
+    }
 
 
 def format_table(summary: dict) -> str:
@@ -168,7 +186,9 @@ def format_table(summary: dict) -> str:
     head = f"{'case':<28}" + "".join(f"{'lag@' + k + 's':>11}" for k in keys) + "   stray run (benign)"
     lines = [head, "-" * len(head)]
     for name, r in summary["per_case"].items():
-        lags = "".join(f"{('-' if r['fence_lag_s'].get(k) is None else format(r['fence_lag_s'][k], '.2f')):>11}" for k in keys)
+        lags = "".join(
+            f"{('-' if r['fence_lag_s'].get(k) is None else format(r['fence_lag_s'][k], '.2f')):>11}" for k in keys
+        )
         extra = "   " + "/".join(str(r["stray_max_run_frames"][k]) for k in keys) if not r["threat"] else ""
         lines.append(f"{name:<28}{lags}{extra}")
     lines.append("-" * len(head))
@@ -180,9 +200,11 @@ def format_table(summary: dict) -> str:
     lines.append(row(f"median, 60-80 km/h ({summary['fast_cases']})", summary["fence_lag_s_fast"]))
     lines.append(f"{'never covered':<28}" + "".join(f"{summary['fence_never_covered'][k]:>11}" for k in keys))
     lines.append(row("lag of the mean-share curve", summary["curve_lag_s"]))
-    lines.append(f"benign cases with in-path evidence over 2 frames: "
-                 + ", ".join(f"{k} s: {v}/{summary['benign_cases']}" for k, v in summary["benign_stray_over_2_frames"].items())
-                 + f"; the controller would warn in {summary['benign_would_warn']}/{summary['benign_cases']}")
+    lines.append(
+        "benign cases with in-path evidence over 2 frames: "
+        + ", ".join(f"{k} s: {v}/{summary['benign_cases']}" for k, v in summary["benign_stray_over_2_frames"].items())
+        + f"; the controller would warn in {summary['benign_would_warn']}/{summary['benign_cases']}"
+    )
     return "\n".join(lines)
 
 

@@ -28,11 +28,11 @@ class StaticShape:
     size_m: tuple[float, ...]
 
     @classmethod
-    def box(cls, center_m, half_extents_m) -> "StaticShape":
+    def box(cls, center_m, half_extents_m) -> StaticShape:
         return cls("box", tuple(map(float, center_m)), tuple(map(float, half_extents_m)))
 
     @classmethod
-    def sphere(cls, center_m, radius_m: float) -> "StaticShape":
+    def sphere(cls, center_m, radius_m: float) -> StaticShape:
         return cls("sphere", tuple(map(float, center_m)), (float(radius_m),))
 
 

@@ -16,18 +16,41 @@ from sim.runner import SUMMARY_KEYS, run_case
 from sim.textures import TextureStyle
 
 TABLE_COLUMNS = (
-    ("scenario", 28), ("threat", 6), ("collision", 9), ("impact_speed_kph", 8), ("min_gap_m", 8),
-    ("ttc_at_first_warning_s", 8), ("ttc_at_first_brake_s", 8), ("false_alarm", 5), ("latency_ms_mean", 7),
-    ("latency_ms_p95", 7), ("lag", 18),
-)  # fmt: skip
-HEADERS = {"impact_speed_kph": "impact", "min_gap_m": "gap_m", "ttc_at_first_warning_s": "ttc_warn",
-           "ttc_at_first_brake_s": "ttc_brk", "false_alarm": "FA", "latency_ms_mean": "lat_ms",
-           "latency_ms_p95": "p95_ms", "lag": "fence lag [s]"}  # fmt: skip
+    ("scenario", 28),
+    ("threat", 6),
+    ("collision", 9),
+    ("impact_speed_kph", 8),
+    ("min_gap_m", 8),
+    ("ttc_at_first_warning_s", 8),
+    ("ttc_at_first_brake_s", 8),
+    ("false_alarm", 5),
+    ("latency_ms_mean", 7),
+    ("latency_ms_p95", 7),
+    ("lag", 18),
+)
+HEADERS = {
+    "impact_speed_kph": "impact",
+    "min_gap_m": "gap_m",
+    "ttc_at_first_warning_s": "ttc_warn",
+    "ttc_at_first_brake_s": "ttc_brk",
+    "false_alarm": "FA",
+    "latency_ms_mean": "lat_ms",
+    "latency_ms_p95": "p95_ms",
+    "lag": "fence lag [s]",
+}
 
 
-def run_cases(cases: list[ScenarioCase], controller: Controller, camera: CameraConfig, seed: int, out_dir: Path,
-              video: bool = False, progress: bool = True, textures: TextureStyle = TextureStyle(),
-              latency: LatencyMode | None = None) -> list[dict]:  # fmt: skip
+def run_cases(
+    cases: list[ScenarioCase],
+    controller: Controller,
+    camera: CameraConfig,
+    seed: int,
+    out_dir: Path,
+    video: bool = False,
+    progress: bool = True,
+    textures: TextureStyle = TextureStyle(),
+    latency: LatencyMode | None = None,
+) -> list[dict]:
     """Run every case into ``out_dir/<case>/`` with the one ``controller`` (reset per run)
     and write ``out_dir/summary.{csv,json}``."""
     summaries = []
@@ -37,8 +60,11 @@ def run_cases(cases: list[ScenarioCase], controller: Controller, camera: CameraC
 
         it = tqdm(cases, desc=controller.name, unit="run", leave=False)
     for case in it:
-        summaries.append(run_case(case, controller, camera, seed, out_dir / case.name, video=video,
-                                  textures=textures, latency=latency))  # fmt: skip
+        summaries.append(
+            run_case(
+                case, controller, camera, seed, out_dir / case.name, video=video, textures=textures, latency=latency
+            )
+        )
     write_table(out_dir, summaries)
     return summaries
 

@@ -53,8 +53,9 @@ class TextureStyle:
             raise ValueError(f"vehicle texture style {self.vehicles!r}: must be one of {VEHICLE_STYLES}")
 
 
-def smooth_noise(rng: np.random.Generator, size_px: int = TEXTURE_SIZE_PX, octaves: int = 5,
-                 first_cells: int = 4, decay: float = 0.7) -> np.ndarray:  # fmt: skip
+def smooth_noise(
+    rng: np.random.Generator, size_px: int = TEXTURE_SIZE_PX, octaves: int = 5, first_cells: int = 4, decay: float = 0.7
+) -> np.ndarray:
     """(size, size) float32 noise in [0, 1], octaves of cubic-upsampled random grids.
 
     Octave k has ``first_cells * 2**k`` cells per side and amplitude ``decay**k``.
@@ -98,8 +99,13 @@ def patches(rng: np.random.Generator, size_px: int, count: int, radius_px: tuple
     return np.clip(cv2.resize(canvas, (size_px, size_px), interpolation=cv2.INTER_AREA), -1.0, 1.0)
 
 
-def detailed_ground(rng: np.random.Generator, rgb: tuple[float, float, float], noise_contrast: float = 1.0,
-                    patch_contrast: float = 0.6, count: int = 700) -> np.ndarray:  # fmt: skip
+def detailed_ground(
+    rng: np.random.Generator,
+    rgb: tuple[float, float, float],
+    noise_contrast: float = 1.0,
+    patch_contrast: float = 0.6,
+    count: int = 700,
+) -> np.ndarray:
     """(256, 256, 3) uint8 ground: broadband noise (2.5 m to 0.3 m cells on a 20 m
     tile, flat spectrum) plus ``count`` patches 1-6 texels in radius."""
     s = GROUND_TEXTURE_SIZE_PX
@@ -122,8 +128,9 @@ def vehicle_paint(rng: np.random.Generator, rgb: tuple[float, float, float]) -> 
     return np.clip(img, 0, 255).astype(np.uint8)
 
 
-def vehicle_detail(rng: np.random.Generator, img: np.ndarray, noise_contrast: float, spot_contrast: float,
-                   spots: int = 30) -> np.ndarray:  # fmt: skip
+def vehicle_detail(
+    rng: np.random.Generator, img: np.ndarray, noise_contrast: float, spot_contrast: float, spots: int = 30
+) -> np.ndarray:
     """A vehicle texture (uint8) with mid-frequency shading (cells of 1/8 to 1/32 of the
     face) and ``spots`` anti-aliased spots 2-8 texels in radius multiplied in."""
     s = img.shape[0]

@@ -22,6 +22,7 @@ from highway_env.road.road import Road, RoadNetwork  # noqa: E402
 from highway_env.vehicle.behavior import IDMVehicle  # noqa: E402
 from highway_env.vehicle.kinematics import Vehicle  # noqa: E402
 
+from controllers.stages import MAX_DECEL_MPS2  # noqa: E402
 from sim.scenery import RoadConfig  # noqa: E402
 
 MAX_SPEED_MPS = 60.0  # [m/s] above any scenario's speeds
@@ -34,7 +35,7 @@ class ActuatorConfig:
     """Ego brake actuator: pure delay, then a jerk-limited approach to the command."""
 
     delay_s: float = 0.1  # [s] command -> start of deceleration build-up
-    max_decel_mps2: float = 9.0  # [m/s^2] full braking on dry asphalt
+    max_decel_mps2: float = MAX_DECEL_MPS2  # [m/s^2] full braking on dry asphalt
     jerk_mps3: float = 30.0  # [m/s^3] rate limit of the deceleration
 
     def __post_init__(self) -> None:
@@ -49,7 +50,13 @@ def build_road(cfg: RoadConfig, seed: int) -> Road:
         y_hw = -cfg.lane_center_y_m(k)
         left_edge = LineType.CONTINUOUS_LINE if k == cfg.lanes_left else LineType.STRIPED
         right_edge = LineType.CONTINUOUS_LINE if k == -cfg.lanes_right else LineType.NONE
-        lane = StraightLane([cfg.x_start_m, y_hw], [cfg.x_end_m, y_hw], width=cfg.lane_width_m, line_types=(left_edge, right_edge), speed_limit=MAX_SPEED_MPS)
+        lane = StraightLane(
+            [cfg.x_start_m, y_hw],
+            [cfg.x_end_m, y_hw],
+            width=cfg.lane_width_m,
+            line_types=(left_edge, right_edge),
+            speed_limit=MAX_SPEED_MPS,
+        )
         net.add_lane("a", "b", lane)
     return Road(network=net, np_random=np.random.RandomState(seed), record_history=False)
 
@@ -83,10 +90,21 @@ class ScriptedVehicle(_Sized, Vehicle):
     traffic, drifting vehicles).
     """
 
-    def __init__(self, road: Road, x_m: float, y_m: float, heading_rad: float, speed_mps: float, length_m: float, width_m: float,
-                 accel_mps2: float = 0.0, brake_onset_s: float = 0.0,
-                 lane_change: tuple[float, float, float] | None = None, max_speed_mps: float = MAX_SPEED_MPS,
-                 keep_lateral: bool = True):  # fmt: skip
+    def __init__(
+        self,
+        road: Road,
+        x_m: float,
+        y_m: float,
+        heading_rad: float,
+        speed_mps: float,
+        length_m: float,
+        width_m: float,
+        accel_mps2: float = 0.0,
+        brake_onset_s: float = 0.0,
+        lane_change: tuple[float, float, float] | None = None,
+        max_speed_mps: float = MAX_SPEED_MPS,
+        keep_lateral: bool = True,
+    ):
         super().__init__(road, np.array([x_m, -y_m], float), -heading_rad, speed_mps)
         self.set_size(length_m, width_m)
         self.accel_mps2 = accel_mps2
@@ -125,7 +143,17 @@ class ScriptedVehicle(_Sized, Vehicle):
 class EgoVehicle(_Sized, Vehicle):
     """The ego: lane keeping on its start lane, braking through an actuator model."""
 
-    def __init__(self, road: Road, x_m: float, y_m: float, speed_mps: float, length_m: float, width_m: float, actuator: ActuatorConfig, sim_dt_s: float):
+    def __init__(
+        self,
+        road: Road,
+        x_m: float,
+        y_m: float,
+        speed_mps: float,
+        length_m: float,
+        width_m: float,
+        actuator: ActuatorConfig,
+        sim_dt_s: float,
+    ):
         super().__init__(road, np.array([x_m, -y_m], float), 0.0, speed_mps)
         self.set_size(length_m, width_m)
         self.actuator = actuator
@@ -152,7 +180,9 @@ class TrafficVehicle(_Sized, IDMVehicle):
     """Background traffic: highway-env's IDM car-following on its lane, no lane changes."""
 
     def __init__(self, road: Road, x_m: float, y_m: float, speed_mps: float, length_m: float, width_m: float):
-        super().__init__(road, np.array([x_m, -y_m], float), 0.0, speed_mps, target_speed=speed_mps, enable_lane_change=False)
+        super().__init__(
+            road, np.array([x_m, -y_m], float), 0.0, speed_mps, target_speed=speed_mps, enable_lane_change=False
+        )
         self.set_size(length_m, width_m)
         self.current_accel_mps2 = 0.0  # [m/s^2] along the heading, as applied in the last step
 
@@ -169,7 +199,7 @@ class TrafficVehicle(_Sized, IDMVehicle):
 
 def _lateral_steering(v: Vehicle, y_ref_m: float, dy_ref_mps: float) -> float:
     """Steering [rad] that tracks a world-frame lateral reference on a straight road."""
-    x, y, heading = v.position[0], -v.position[1], -v.heading
+    y, heading = -v.position[1], -v.heading
     forward = 1.0 if math.cos(heading) >= 0 else -1.0
     speed = max(abs(v.speed), 1.0)
     # desired world heading: follow the reference's slope, correct the lateral error

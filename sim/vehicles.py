@@ -19,9 +19,15 @@ from scenarios.vehicle_classes import VEHICLE_CLASSES  # noqa: F401  (re-exporte
 EGO_SIZE_M = (4.6, 1.815, 1.45)  # Euro NCAP files use a 1.815 m ego width
 
 PALETTE = [
-    (0.8, 0.1, 0.1), (0.1, 0.2, 0.7), (0.9, 0.9, 0.9), (0.15, 0.15, 0.15),
-    (0.6, 0.6, 0.65), (0.1, 0.5, 0.2), (0.9, 0.6, 0.1), (0.5, 0.1, 0.5),
-]  # fmt: skip
+    (0.8, 0.1, 0.1),
+    (0.1, 0.2, 0.7),
+    (0.9, 0.9, 0.9),
+    (0.15, 0.15, 0.15),
+    (0.6, 0.6, 0.65),
+    (0.1, 0.5, 0.2),
+    (0.9, 0.6, 0.1),
+    (0.5, 0.1, 0.5),
+]
 
 WHEEL_RADIUS_M = 0.32
 WHEEL_WIDTH_M = 0.22
@@ -56,7 +62,9 @@ def sample_spec(rng: np.random.Generator, kind: str) -> VehicleSpec:
         raise ValueError(f"unknown vehicle kind {kind!r}; known: {sorted(VEHICLE_CLASSES)}")
     (l0, l1), (w0, w1), (h0, h1) = VEHICLE_CLASSES[kind]
     palette_index = int(rng.integers(len(PALETTE)))
-    return VehicleSpec(kind, float(rng.uniform(l0, l1)), float(rng.uniform(w0, w1)), float(rng.uniform(h0, h1)), palette_index)
+    return VehicleSpec(
+        kind, float(rng.uniform(l0, l1)), float(rng.uniform(w0, w1)), float(rng.uniform(h0, h1)), palette_index
+    )
 
 
 @dataclass(frozen=True)
@@ -75,21 +83,46 @@ def parts(spec: VehicleSpec) -> list[Part]:
     truck = spec.kind == "truck"
     van = spec.kind == "van"
     body_top = GROUND_CLEARANCE_M + (0.45 * H if not truck else 0.35 * H)
-    out = [Part("box", (0.0, 0.0, (GROUND_CLEARANCE_M + body_top) / 2), (L / 2, W / 2, (body_top - GROUND_CLEARANCE_M) / 2), "paint")]
+    out = [
+        Part(
+            "box",
+            (0.0, 0.0, (GROUND_CLEARANCE_M + body_top) / 2),
+            (L / 2, W / 2, (body_top - GROUND_CLEARANCE_M) / 2),
+            "paint",
+        )
+    ]
     if truck:
         cab_len = 2.2
-        out.append(Part("box", (L / 2 - cab_len / 2, 0.0, (body_top + H * 0.85) / 2), (cab_len / 2, W / 2 * 0.98, (H * 0.85 - body_top) / 2), "glass"))
+        out.append(
+            Part(
+                "box",
+                (L / 2 - cab_len / 2, 0.0, (body_top + H * 0.85) / 2),
+                (cab_len / 2, W / 2 * 0.98, (H * 0.85 - body_top) / 2),
+                "glass",
+            )
+        )
         box_len = L - cab_len - 0.3
-        out.append(Part("box", (-L / 2 + box_len / 2, 0.0, (body_top + H) / 2), (box_len / 2, W / 2, (H - body_top) / 2), "paint"))
+        out.append(
+            Part(
+                "box",
+                (-L / 2 + box_len / 2, 0.0, (body_top + H) / 2),
+                (box_len / 2, W / 2, (H - body_top) / 2),
+                "paint",
+            )
+        )
     else:
         cab_len = L * (0.8 if van else 0.52)
         cab_x = -L * (0.06 if van else 0.08)
-        out.append(Part("box", (cab_x, 0.0, (body_top + H) / 2), (cab_len / 2, W / 2 * 0.92, (H - body_top) / 2), "glass"))
+        out.append(
+            Part("box", (cab_x, 0.0, (body_top + H) / 2), (cab_len / 2, W / 2 * 0.92, (H - body_top) / 2), "glass")
+        )
     axle = L / 2 - max(0.8, 0.17 * L)
     for x in (axle, -axle):
         for side in (1, -1):
             y = side * (W / 2 - WHEEL_WIDTH_M / 2)
-            out.append(Part("wheel", (x, y, WHEEL_RADIUS_M), (WHEEL_RADIUS_M, WHEEL_WIDTH_M / 2, WHEEL_RADIUS_M), "tyre"))
+            out.append(
+                Part("wheel", (x, y, WHEEL_RADIUS_M), (WHEEL_RADIUS_M, WHEEL_WIDTH_M / 2, WHEEL_RADIUS_M), "tyre")
+            )
     return out
 
 

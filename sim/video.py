@@ -11,8 +11,14 @@ import numpy as np
 TTC_MAX_S = 4.0  # overlay colours 0 < tau <= TTC_MAX_S [s]; red = imminent
 
 
-def ttc_overlay(image_rgb: np.ndarray, tau_s: np.ndarray, valid: np.ndarray, instance: np.ndarray,
-                alpha_actor: float = 0.6, alpha_static: float = 0.3) -> np.ndarray:  # fmt: skip
+def ttc_overlay(
+    image_rgb: np.ndarray,
+    tau_s: np.ndarray,
+    valid: np.ndarray,
+    instance: np.ndarray,
+    alpha_actor: float = 0.6,
+    alpha_static: float = 0.3,
+) -> np.ndarray:
     """Blend a red (0 s) -> yellow -> green (TTC_MAX_S) colour map over approaching pixels;
     vehicles (instance > 0) more strongly than the static world."""
     out = image_rgb.astype(np.float32).copy()

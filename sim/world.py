@@ -30,10 +30,11 @@ with c_output_suppressed():
     import pybullet as p
     from pybullet_utils import bullet_client
 
-from sim import meshes, textures
+from sim import textures
+from sim.bodies import create_static_bodies, create_vehicle_bodies
 from sim.camera import CameraConfig, view_matrix_gl
 from sim.scenery import RoadConfig, Scenery, StaticShape, build_scenery
-from sim.vehicles import VehicleSpec, parts
+from sim.vehicles import VehicleSpec
 
 
 @dataclass
@@ -49,9 +50,6 @@ class Render:
     instance: np.ndarray
 
 
-MAX_SHAPES_PER_BODY = 16  # PyBullet renders at most this many shapes of one createVisualShapeArray
-WHEEL_LENGTH_PER_HALF_WIDTH = 4.0  # mesh wheel length / the wheel part's half width
-SPHERES_PER_MESH = 32  # spheres baked into one mesh body
 SCENES_PER_CLIENT = 256  # reconnect after this many resets: removeBody keeps the visual shape records
 
 
@@ -72,8 +70,15 @@ class World:
         style: the texture styles of that private bank (ignored with ``bank``).
     """
 
-    def __init__(self, camera: CameraConfig, road: RoadConfig, seed: int, light_direction: tuple[float, float, float] | None = None,
-                 bank: textures.TextureBank | None = None, style: textures.TextureStyle = textures.TextureStyle()):  # fmt: skip
+    def __init__(
+        self,
+        camera: CameraConfig,
+        road: RoadConfig,
+        seed: int,
+        light_direction: tuple[float, float, float] | None = None,
+        bank: textures.TextureBank | None = None,
+        style: textures.TextureStyle = textures.TextureStyle(),
+    ):
         self._client: bullet_client.BulletClient | None = None
         self._tmp = Path(tempfile.mkdtemp(prefix="bittc_world_"))
         self.bank = bank if bank is not None else textures.TextureBank(seed, self._tmp, style.ground, style.vehicles)
@@ -90,8 +95,13 @@ class World:
         self._bodies: list[int] = []
         self._scenes_on_client = 0
 
-    def reset(self, camera: CameraConfig, road: RoadConfig, seed: int,
-              light_direction: tuple[float, float, float] | None = None) -> None:
+    def reset(
+        self,
+        camera: CameraConfig,
+        road: RoadConfig,
+        seed: int,
+        light_direction: tuple[float, float, float] | None = None,
+    ) -> None:
         """Replace the scene: new camera, road, scenery and lighting, no vehicles.
 
         The result renders exactly as a new ``World(camera, road, seed, light_direction,
@@ -168,27 +178,10 @@ class World:
         Boxes go in compound bodies of up to ``MAX_SHAPES_PER_BODY``; spheres are baked
         into one low-polygon mesh per ``SPHERES_PER_MESH`` (see :mod:`sim.meshes`).
         """
-        c = self.client
-        uids = []
-        boxes = [s for s in shapes if s.kind == "box"]
-        spheres = [s for s in shapes if s.kind == "sphere"]
-        if len(boxes) + len(spheres) != len(shapes):
-            raise ValueError(f"unknown static shape kinds {sorted({s.kind for s in shapes} - {'box', 'sphere'})}")
-        for i in range(0, len(boxes), MAX_SHAPES_PER_BODY):
-            chunk = boxes[i:i + MAX_SHAPES_PER_BODY]
-            vs = c.createVisualShapeArray(
-                shapeTypes=[p.GEOM_BOX] * len(chunk), halfExtents=[list(s.size_m) for s in chunk],
-                visualFramePositions=[list(s.center_m) for s in chunk], rgbaColors=[[*rgb, 1.0]] * len(chunk),
-            )  # fmt: skip
-            uids.append(c.createMultiBody(0, -1, vs))
-        for i in range(0, len(spheres), SPHERES_PER_MESH):
-            chunk = spheres[i:i + SPHERES_PER_MESH]
-            mesh = meshes.merge(meshes.SPHERE, [[s.size_m[0]] * 3 for s in chunk], [s.center_m for s in chunk])
-            vs = c.createVisualShape(p.GEOM_MESH, rgbaColor=[*rgb, 1.0], **mesh)
-            uids.append(c.createMultiBody(0, -1, vs))
+        uids = create_static_bodies(self.client, shapes, rgb)
         for uid in uids:
             if texture_id is not None:
-                c.changeVisualShape(uid, -1, textureUniqueId=texture_id)
+                self.client.changeVisualShape(uid, -1, textureUniqueId=texture_id)
             self._register(uid, 0)
         return uids
 
@@ -212,34 +205,15 @@ class World:
         """
         c = self.client
         variant = int(self.rng.integers(textures.VARIANTS))
-        tex = {"paint": self.texture("paint", variant, spec.palette_index),
-               "glass": self.texture("glass", variant, spec.palette_index)}  # fmt: skip
-        boxes = [part for part in parts(spec) if part.shape == "box"]
-        wheels = [part for part in parts(spec) if part.shape == "wheel"]
-        shapes = [c.createVisualShape(p.GEOM_BOX, halfExtents=list(part.half_extents_m)) for part in boxes]
-        n = len(shapes) - 1
-        base_pos = np.asarray(boxes[0].center_m)
-        uid = c.createMultiBody(
-            0, -1, shapes[0], basePosition=[0, 0, -50.0],
-            baseInertialFramePosition=[0, 0, 0],
-            linkMasses=[0] * n, linkCollisionShapeIndices=[-1] * n, linkVisualShapeIndices=shapes[1:],
-            linkPositions=[list(np.asarray(part.center_m) - base_pos) for part in boxes[1:]], linkOrientations=[[0, 0, 0, 1]] * n,
-            linkInertialFramePositions=[[0, 0, 0]] * n, linkInertialFrameOrientations=[[0, 0, 0, 1]] * n,
-            linkParentIndices=[0] * n, linkJointTypes=[p.JOINT_FIXED] * n, linkJointAxis=[[0, 0, 1]] * n,
-        )  # fmt: skip
-        for link, part in enumerate(boxes):
-            c.changeVisualShape(uid, link - 1, textureUniqueId=tex[part.texture])
-        # wheel half extents are (radius, half width, radius); the unit wheel is 1 m long
-        # and twice the part's width, so that it shows beside the body as PyBullet's own
-        # cylinders of that length did
-        mesh = meshes.merge(meshes.WHEEL, [[w.half_extents_m[0], WHEEL_LENGTH_PER_HALF_WIDTH * w.half_extents_m[1], w.half_extents_m[0]] for w in wheels],
-                            [w.center_m for w in wheels])  # fmt: skip
-        wheel_uid = c.createMultiBody(0, -1, c.createVisualShape(p.GEOM_MESH, rgbaColor=[0.08, 0.08, 0.08, 1.0], **mesh),
-                                      basePosition=[0, 0, -50.0])  # fmt: skip
+        tex = {
+            "paint": self.texture("paint", variant, spec.palette_index),
+            "glass": self.texture("glass", variant, spec.palette_index),
+        }
+        uid, wheel_uid, base_z = create_vehicle_bodies(c, spec, tex)
         instance = len(self._vehicle_uid) + 1
         self._vehicle_uid[instance] = uid
         self._wheel_uid[instance] = wheel_uid
-        self._vehicle_base_z[instance] = float(base_pos[2])
+        self._vehicle_base_z[instance] = base_z
         self._register(uid, instance)
         self._register(wheel_uid, instance)
         return instance
@@ -278,7 +252,9 @@ class World:
             # Anti-aliased colour from a supersampled render; exact depth/instance from an
             # output-resolution render whose samples sit at the output pixel centres.
             if with_rgb:
-                hi, _, hseg = self._raw(cam.width_px * s, cam.height_px * s, view, cam.projection_matrix_gl(s), p.ER_NO_SEGMENTATION_MASK)
+                hi, _, hseg = self._raw(
+                    cam.width_px * s, cam.height_px * s, view, cam.projection_matrix_gl(s), p.ER_NO_SEGMENTATION_MASK
+                )
                 rgb = hi.reshape(cam.height_px, s, cam.width_px, s, 3).mean(axis=(1, 3)).round().astype(np.uint8)
             _, depth_buf, seg = self._raw(cam.width_px, cam.height_px, view, cam.projection_matrix_gl(1), flags)
         if not with_rgb:
@@ -292,9 +268,18 @@ class World:
 
     def _raw(self, w: int, h: int, view, proj, flags):
         _, _, rgba, depth, seg = self.client.getCameraImage(
-            w, h, view, proj, renderer=p.ER_TINY_RENDERER, flags=flags, shadow=0,
-            lightDirection=list(self.light_direction), lightAmbientCoeff=0.6, lightDiffuseCoeff=0.5, lightSpecularCoeff=0.05,
-        )  # fmt: skip
+            w,
+            h,
+            view,
+            proj,
+            renderer=p.ER_TINY_RENDERER,
+            flags=flags,
+            shadow=0,
+            lightDirection=list(self.light_direction),
+            lightAmbientCoeff=0.6,
+            lightDiffuseCoeff=0.5,
+            lightSpecularCoeff=0.05,
+        )
         rgb = np.asarray(rgba, np.uint8).reshape(h, w, 4)[..., :3].copy()
         seg = np.asarray(seg, np.int64).reshape(h, w)
         if flags != p.ER_NO_SEGMENTATION_MASK:

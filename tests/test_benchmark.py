@@ -39,8 +39,9 @@ def test_settings_need_a_warmup_round():
         BenchSettings(warmup=0)
 
 
-@pytest.mark.parametrize("size, needle", [("95x288", "multiples of 3"), ("96by288", "expected HxW"),
-                                          ("9x288", "height must be in")])
+@pytest.mark.parametrize(
+    "size, needle", [("95x288", "multiples of 3"), ("96by288", "expected HxW"), ("9x288", "height must be in")]
+)
 def test_bench_refuses_a_bad_size_before_timing(size, needle, capsys):
     from bittc_core.cli import main
 

@@ -5,13 +5,16 @@ import pytest
 
 from sim.camera import CameraConfig, cam_T_ego
 from sim.scenery import RoadConfig
+from sim.vehicles import VehicleSpec
 from sim.world import World
 
 
 @pytest.fixture(scope="module")
 def world():
     cam = CameraConfig(pitch_deg=0.0, mount_forward_m=0.0, mount_height_m=1.0)
-    w = World(cam, RoadConfig(x_start_m=-100, x_end_m=-60, barrier=False, buildings=False, roadside_spacing_m=1e3), seed=0)
+    w = World(
+        cam, RoadConfig(x_start_m=-100, x_end_m=-60, barrier=False, buildings=False, roadside_spacing_m=1e3), seed=0
+    )
     yield w
     w.close()
 
@@ -40,6 +43,11 @@ def test_two_worlds_in_one_process_are_independent():
     try:
         ra, rb = a.render(cam_T_ego(cam)), b.render(cam_T_ego(cam))
         assert np.array_equal(ra.rgb, rb.rgb) and np.array_equal(ra.depth_m, rb.depth_m)
+        inst = a.add_vehicle(VehicleSpec("car", 4.5, 1.8, 1.5))  # a body in one world only
+        a.set_vehicle_pose(inst, 12.0, 0.0, 0.0)
+        ra2, rb1 = a.render(cam_T_ego(cam)), b.render(cam_T_ego(cam))
+        assert (ra2.instance == inst).sum() > 100 and not np.array_equal(ra2.rgb, ra.rgb)
+        assert np.array_equal(rb1.rgb, rb.rgb) and not (rb1.instance > 0).any()
         a.close()
         rb2 = b.render(cam_T_ego(cam))
         assert np.array_equal(rb.rgb, rb2.rgb)

@@ -14,10 +14,28 @@ def test_run_writes_documented_outputs(tmp_path, capsys):
     out = tmp_path / "run"
     assert main(["run", "CCRs-50", "--controller", "oracle", "--out", str(out)]) == 0
     s = json.loads((out / "summary.json").read_text())
-    for key in ("scenario", "controller", "threat", "collision", "impact_speed_kph", "relative_impact_speed_kph",
-                "min_gap_m", "t_first_warning_s", "ttc_at_first_warning_s", "t_first_brake_s",
-                "ttc_at_first_brake_s", "false_alarm", "steps", "sim_time_s", "num_alphas", "thresholds_s",
-                "latency_mode", "latency_ms_mean", "latency_ms_p95", "frames_skipped"):  # fmt: skip
+    for key in (
+        "scenario",
+        "controller",
+        "threat",
+        "collision",
+        "impact_speed_kph",
+        "relative_impact_speed_kph",
+        "min_gap_m",
+        "t_first_warning_s",
+        "ttc_at_first_warning_s",
+        "t_first_brake_s",
+        "ttc_at_first_brake_s",
+        "false_alarm",
+        "steps",
+        "sim_time_s",
+        "num_alphas",
+        "thresholds_s",
+        "latency_mode",
+        "latency_ms_mean",
+        "latency_ms_p95",
+        "frames_skipped",
+    ):
         assert key in s
     header = (out / "trace.csv").read_text().splitlines()[0].split(",")
     for col in ("t_s", "ego_speed_kph", "critical_ttc_s", "warning", "brake_cmd_mps2", "gap_m_actor1"):
@@ -68,7 +86,9 @@ def test_readonly_out(tmp_path, capsys):
 
 
 def test_console_script_lists_scenarios():
-    r = subprocess.run([sys.executable, "-m", "bittc_core.cli", "scenarios"], capture_output=True, text=True, check=True)
+    r = subprocess.run(
+        [sys.executable, "-m", "bittc_core.cli", "scenarios"], capture_output=True, text=True, check=True
+    )
     assert "CCRs" in r.stdout and "benign-free-road" in r.stdout
 
 

@@ -34,8 +34,10 @@ def test_every_subcommand_has_a_help_line():
             assert set(helps) == set(action.choices) and all(helps.values()), helps
 
 
-@pytest.mark.parametrize("path, parser, action", [
-    pytest.param(*row, id=" ".join((*row[0][1:], "/".join(row[2].option_strings) or row[2].dest))) for row in ACTIONS])
+@pytest.mark.parametrize(
+    "path, parser, action",
+    [pytest.param(*row, id=" ".join((*row[0][1:], "/".join(row[2].option_strings) or row[2].dest))) for row in ACTIONS],
+)
 def test_every_option_has_a_help_text(path, parser, action):
     name = "/".join(action.option_strings) or action.dest
     assert action.help and action.help.strip() and action.help != argparse.SUPPRESS, f"{' '.join(path)} {name}"
@@ -64,9 +66,13 @@ def test_enumerated_options_without_choices_list_their_values_in_the_help():
     expected = [(c, "--ground-texture", GROUND_STYLES) for c in ("run", "suite", "generate")]
     expected += [(c, "--vehicle-texture", VEHICLE_STYLES) for c in ("run", "suite", "generate")]
     expected += [(c, "--controller", tuple(controllers.REGISTRY)) for c in ("run", "suite")]
-    expected += [("sweep", "--controllers", tuple(controllers.REGISTRY)), ("sweep", "--suite", tuple(scenarios.SUITES)),
-                 ("eval", "--scenarios", tuple(scenarios.SUITES)), ("train", "--config", tuple(CONFIGS)),
-                 ("train", "--stage", STAGE_CHOICES)]
+    expected += [
+        ("sweep", "--controllers", tuple(controllers.REGISTRY)),
+        ("sweep", "--suite", tuple(scenarios.SUITES)),
+        ("eval", "--scenarios", tuple(scenarios.SUITES)),
+        ("train", "--config", tuple(CONFIGS)),
+        ("train", "--stage", STAGE_CHOICES),
+    ]
     for command, flag, values in expected:
         parser, action = _option(command, flag)
         text = _formatted(parser, action)
@@ -91,12 +97,15 @@ def test_every_seed_flag_has_the_same_bounds():
             check_seed(bad)
 
 
-@pytest.mark.parametrize("argv", [
-    ["run", "CCRs-50", "--controller", "oracle", "--out", "OUT"],
-    ["suite", "--scenarios", "CCRs-50", "--out", "OUT"],
-    ["generate", "--out", "OUT", "--samples", "1"],
-    ["eval", "--scenarios", "CCRs-50", "--method", "flow", "--out", "OUT/e.json"],
-])
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["run", "CCRs-50", "--controller", "oracle", "--out", "OUT"],
+        ["suite", "--scenarios", "CCRs-50", "--out", "OUT"],
+        ["generate", "--out", "OUT", "--samples", "1"],
+        ["eval", "--scenarios", "CCRs-50", "--method", "flow", "--out", "OUT/e.json"],
+    ],
+)
 def test_a_seed_out_of_range_is_refused_by_every_subcommand(tmp_path, capsys, argv):
     argv = [str(tmp_path / "o") if a == "OUT" else a.replace("OUT", str(tmp_path)) for a in argv]
     assert main([*argv, "--seed", str(MAX_SEED + 1)]) == 2
@@ -106,8 +115,9 @@ def test_a_seed_out_of_range_is_refused_by_every_subcommand(tmp_path, capsys, ar
 def test_train_refuses_a_seed_out_of_range():
     from bittc_core.cli import train_cmd
 
-    args = build_parser().parse_args(["train", "--data", "synthetic", "--config", "tiny", "--out", "m.pt",
-                                      "--seed", str(MAX_SEED + 1)])  # fmt: skip
+    args = build_parser().parse_args(
+        ["train", "--data", "synthetic", "--config", "tiny", "--out", "m.pt", "--seed", str(MAX_SEED + 1)]
+    )
     with pytest.raises(CliError, match="--seed"):
         train_cmd._check(args)
 

@@ -37,8 +37,13 @@ def test_camera_fed_run_with_fixed_latency_is_byte_identical(tmp_path):
 
 
 def test_a_network_driven_run_brakes_for_a_stationary_target(tmp_path):
-    s = run_case(scenarios.resolve("CCRs-30")[0], controllers.make("geofence"), CameraConfig(), seed=0,
-                 latency=parse_latency("fixed:20"))
+    s = run_case(
+        scenarios.resolve("CCRs-30")[0],
+        controllers.make("geofence"),
+        CameraConfig(),
+        seed=0,
+        latency=parse_latency("fixed:20"),
+    )
     assert s["t_first_brake_s"] is not None and s["speed_reduction_kph"] > 15
 
 
@@ -46,9 +51,25 @@ def test_the_example_controller_runs(tmp_path):
     """As the README runs it: the file's path, from any directory."""
     out = tmp_path / "mine"
     example = ROOT / "examples" / "my_controller.py"
-    r = subprocess.run([sys.executable, "-m", "bittc_core.cli", "run", "CCRs-30", "--controller",
-                        f"{example}:DistanceKeeper", "--latency", "fixed:20", "--out", str(out)],
-                       cwd=tmp_path, capture_output=True, text=True, timeout=300)
+    r = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "bittc_core.cli",
+            "run",
+            "CCRs-30",
+            "--controller",
+            f"{example}:DistanceKeeper",
+            "--latency",
+            "fixed:20",
+            "--out",
+            str(out),
+        ],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert r.returncode == 0, r.stderr
     s = json.loads((out / "summary.json").read_text())
     assert s["controller"] == "distance-keeper" and s["t_first_brake_s"] is not None

@@ -5,8 +5,8 @@ import dataclasses
 import pytest
 import torch
 
-from bittc_core.cli import train_cmd
 from bittc_core.checkpoint import make_payload, save_checkpoint
+from bittc_core.cli import train_cmd
 from bittc_core.errors import CliError
 from bittc_core.model import BinaryTTCNet, get_config
 from bittc_core.model.flip import flip_views, merge_flip_views
@@ -155,10 +155,14 @@ def test_train_cli_refuses_a_teacher_of_another_config_or_its_own_output(tmp_pat
 def test_resume_keeps_the_teacher(tmp_path):
     teacher = save_net(tmp_path / "teacher.pt", tiny_net(0), "tiny")
     assert train_cmd.run(cli_args(tmp_path, "--teacher", teacher, "--distill-weight", "0.5")) == 0
-    for extra, match in ((["--resume"], "--teacher None"),
-                         (["--resume", "--teacher", teacher], r"not --teacher .* \(distill weight 1\)"),
-                         (["--resume", "--teacher", save_net(tmp_path / "t2.pt", tiny_net(3), "tiny"),
-                           "--distill-weight", "0.5"], "t2.pt")):
+    for extra, match in (
+        (["--resume"], "--teacher None"),
+        (["--resume", "--teacher", teacher], r"not --teacher .* \(distill weight 1\)"),
+        (
+            ["--resume", "--teacher", save_net(tmp_path / "t2.pt", tiny_net(3), "tiny"), "--distill-weight", "0.5"],
+            "t2.pt",
+        ),
+    ):
         with pytest.raises(CliError, match=match):
             train_cmd.run(cli_args(tmp_path, *extra))
     args = cli_args(tmp_path, "--resume", "--teacher", teacher, "--distill-weight", "0.5", "--steps", "3")

@@ -42,9 +42,10 @@ def test_same_seed_same_rollout_and_truth_stays_in_info():
         assert info["gt"]["tau_s"].shape == obs["image"].shape[:2] and info["critical"]["ttc_s"] > 0
         return images, rewards, info["end_reason"]
 
-    a, b = rollout(5), rollout(5)
+    a, b, c = rollout(5), rollout(5), rollout(6)
     assert a[2] == b[2] == "standstill" and a[1] == b[1]
     assert all(np.array_equal(x, y) for x, y in zip(a[0], b[0]))
+    assert not all(np.array_equal(x, y) for x, y in zip(a[0], c[0]))  # another seed: another rollout
 
 
 def test_latency_skips_frames_as_the_runner_does():
@@ -78,8 +79,13 @@ def test_bad_actions_are_refused_by_value(action):
 
 
 def test_vector_env_sync():
-    envs = gym.make_vec("bittc/Scenario-v0", num_envs=2, vectorization_mode="sync", scenario="CCRs-20",
-                        wrappers=[lambda e: GeofenceObservation(e, estimator="flow", thresholds_s=[1.0, 2.0])])
+    envs = gym.make_vec(
+        "bittc/Scenario-v0",
+        num_envs=2,
+        vectorization_mode="sync",
+        scenario="CCRs-20",
+        wrappers=[lambda e: GeofenceObservation(e, estimator="flow", thresholds_s=[1.0, 2.0])],
+    )
     obs, _ = envs.reset(seed=3)
     assert obs["geofence"].shape == (2, 2, 96, 288)
     obs, r, term, trunc, _ = envs.step(np.zeros((2, 1), np.float32))

@@ -5,8 +5,7 @@ import pytest
 import torch
 
 from bittc_core.data.synthetic import SyntheticConfig, SyntheticPairs
-from bittc_core.estimator import (BittcEstimator, EstimatorInputError, FlowEstimator, OracleEstimator,
-                                  quantize)
+from bittc_core.estimator import BittcEstimator, EstimatorInputError, FlowEstimator, OracleEstimator, quantize
 from bittc_core.model import BinaryTTCNet, get_config
 
 H, W = 48, 96
@@ -22,32 +21,38 @@ def frame(seed):
     return np.random.default_rng(seed).integers(0, 256, (H, W, 3), dtype=np.uint8)
 
 
-@pytest.mark.parametrize("prev, latest, match", [
-    (np.zeros((H, W, 3), np.uint8), np.zeros((H + 3, W, 3), np.uint8), "differ in size"),
-    (np.zeros((H, W, 3), np.float32), np.zeros((H, W, 3), np.uint8), "dtype float32"),
-    (np.zeros((H, W, 4), np.uint8), np.zeros((H, W, 4), np.uint8), r"\(48, 96, 4\)"),
-    (torch.zeros(4, H, W), torch.zeros(4, H, W), r"\(4, 48, 96\)"),
-    (torch.full((3, H, W), float("nan")), torch.zeros(3, H, W), "NaN"),
-    (torch.zeros(3, H, W, dtype=torch.uint8), torch.zeros(3, H, W), "torch.uint8"),
-    (torch.full((3, H, W), 2.0), torch.zeros(3, H, W), r"\[0, 1\]"),
-    ("image.png", "image.png", "str"),
-    (np.zeros((50, W, 3), np.uint8), np.zeros((50, W, 3), np.uint8), "multiples of 3"),
-])
+@pytest.mark.parametrize(
+    "prev, latest, match",
+    [
+        (np.zeros((H, W, 3), np.uint8), np.zeros((H + 3, W, 3), np.uint8), "differ in size"),
+        (np.zeros((H, W, 3), np.float32), np.zeros((H, W, 3), np.uint8), "dtype float32"),
+        (np.zeros((H, W, 4), np.uint8), np.zeros((H, W, 4), np.uint8), r"\(48, 96, 4\)"),
+        (torch.zeros(4, H, W), torch.zeros(4, H, W), r"\(4, 48, 96\)"),
+        (torch.full((3, H, W), float("nan")), torch.zeros(3, H, W), "NaN"),
+        (torch.zeros(3, H, W, dtype=torch.uint8), torch.zeros(3, H, W), "torch.uint8"),
+        (torch.full((3, H, W), 2.0), torch.zeros(3, H, W), r"\[0, 1\]"),
+        ("image.png", "image.png", "str"),
+        (np.zeros((50, W, 3), np.uint8), np.zeros((50, W, 3), np.uint8), "multiples of 3"),
+    ],
+)
 def test_bad_images(est, prev, latest, match):
     with pytest.raises(EstimatorInputError, match=match):
         est.geofence(prev, latest, [1.0])
 
 
-@pytest.mark.parametrize("thresholds, match", [
-    ([], "empty"),
-    ([1.0, -0.5], "-0.5"),
-    ([0.0], "0.0"),
-    ([float("nan")], "nan"),
-    ([0.05], "0.05 s outside the trained range"),
-    ([1.0, 50.0], "50 s outside the trained range"),
-    ([[1.0, 2.0]], "1-D"),
-    (["soon"], "not a list of numbers"),
-])
+@pytest.mark.parametrize(
+    "thresholds, match",
+    [
+        ([], "empty"),
+        ([1.0, -0.5], "-0.5"),
+        ([0.0], "0.0"),
+        ([float("nan")], "nan"),
+        ([0.05], "0.05 s outside the trained range"),
+        ([1.0, 50.0], "50 s outside the trained range"),
+        ([[1.0, 2.0]], "1-D"),
+        (["soon"], "not a list of numbers"),
+    ],
+)
 def test_bad_thresholds(est, thresholds, match):
     with pytest.raises(EstimatorInputError, match=match):
         est.geofence(frame(0), frame(1), thresholds)
@@ -84,8 +89,9 @@ def test_streaming_reuses_features_and_matches_uncached(est):
     outs = [est.geofence(f[i], f[i + 1], [0.5, 1.0, 3.0]) for i in range(3)]
     assert est.feature_computations - n0 == 4  # f0, f1, f2, f3: each extracted once
     est.geofence(f[2], f[3], [2.0])  # same pair, other thresholds: nothing new
-    est.continuous(torch.from_numpy(f[2]).permute(2, 0, 1).float() / 255,
-                   torch.from_numpy(f[3]).permute(2, 0, 1).float() / 255)  # same pixels as tensors
+    est.continuous(
+        torch.from_numpy(f[2]).permute(2, 0, 1).float() / 255, torch.from_numpy(f[3]).permute(2, 0, 1).float() / 255
+    )  # same pixels as tensors
     assert est.feature_computations - n0 == 4
     est.reset()
     fresh = est.geofence(f[1], f[2], [0.5, 1.0, 3.0])
@@ -156,6 +162,7 @@ def test_bad_tta_mode(est):
     with pytest.raises(EstimatorInputError, match="tta='mirror'"):
         BittcEstimator(est.net, device=torch.device("cpu"), tta="mirror")
     from bittc_core.estimator import make_estimator
+
     with pytest.raises(EstimatorInputError, match="tta='flip' only applies to method 'bittc'"):
         make_estimator("flow", tta="flip")
 
@@ -218,8 +225,9 @@ def test_oracle_auc_quantizes_eta_to_the_volume():
 
 
 def test_flow_baseline_recovers_a_pure_expansion():
-    cfg = SyntheticConfig(height_px=96, width_px=192, patches=(0, 0), background_eta=(0.9, 0.9),
-                          max_translation_px=0.0, noise_std=0.0)
+    cfg = SyntheticConfig(
+        height_px=96, width_px=192, patches=(0, 0), background_eta=(0.9, 0.9), max_translation_px=0.0, noise_std=0.0
+    )
     s = SyntheticPairs(1, cfg, seed=3)[0]
     flow = FlowEstimator()
     eta = flow.motion_in_depth(s["image_prev"], s["image_latest"])

@@ -43,8 +43,12 @@ def test_killed_run_resumes_to_the_same_dataset(tmp_path):
     ref, killed = tmp_path / "ref", tmp_path / "killed"
     argv = ["--samples", "10", "--seed", "3", "--size", "48x144", "--no-progress"]
     generate(ref, SMALL, "train", 10, workers=1, backend="local", progress=False)
-    proc = subprocess.Popen([sys.executable, "-m", "bittc_core.cli", "generate", "--out", str(killed), *argv],
-                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)  # fmt: skip
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "bittc_core.cli", "generate", "--out", str(killed), *argv],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+        start_new_session=True,
+    )
     deadline = time.time() + 120
     while time.time() < deadline and len(list((killed / "train").glob("0*"))) < 3:
         time.sleep(0.05)
@@ -88,10 +92,19 @@ def test_generated_ground_truth_meets_the_closed_forms(tmp_path):
 def test_dataset_tensors_have_documented_shapes_and_flip_consistently(tmp_path):
     generate(tmp_path, SMALL, "train", 2, workers=1, backend="local", progress=False)
     plain = TTCDataset(tmp_path, "train")[0]
-    expect = {"image_prev": ((3, 48, 144), torch.float32), "image_latest": ((3, 48, 144), torch.float32),
-              "eta": ((48, 144), torch.float32), "tau_s": ((48, 144), torch.float32), "flow_px": ((2, 48, 144), torch.float32),
-              "valid": ((48, 144), torch.bool), "instance": ((48, 144), torch.int64), "inpath": ((48, 144), torch.bool),
-              "dt_s": ((), torch.float32), "intrinsics": ((4,), torch.float32), "ego_speed_mps": ((), torch.float32)}  # fmt: skip
+    expect = {
+        "image_prev": ((3, 48, 144), torch.float32),
+        "image_latest": ((3, 48, 144), torch.float32),
+        "eta": ((48, 144), torch.float32),
+        "tau_s": ((48, 144), torch.float32),
+        "flow_px": ((2, 48, 144), torch.float32),
+        "valid": ((48, 144), torch.bool),
+        "instance": ((48, 144), torch.int64),
+        "inpath": ((48, 144), torch.bool),
+        "dt_s": ((), torch.float32),
+        "intrinsics": ((4,), torch.float32),
+        "ego_speed_mps": ((), torch.float32),
+    }
     assert set(plain) == set(expect)
     for k, (shape, dtype) in expect.items():
         assert tuple(plain[k].shape) == shape and plain[k].dtype == dtype, k
@@ -148,13 +161,20 @@ def test_foreign_or_mismatched_dir_is_refused(tmp_path, capsys):
     assert "not a bittc dataset" in capsys.readouterr().err
     ds = tmp_path / "ds"
     generate(ds, SMALL, "train", 1, workers=1, backend="local", progress=False)
-    assert main(["generate", "--out", str(ds), "--samples", "1", "--seed", "4", "--size", "48x144", "--no-progress"]) == 2
+    assert (
+        main(["generate", "--out", str(ds), "--samples", "1", "--seed", "4", "--size", "48x144", "--no-progress"]) == 2
+    )
     assert "seed = 3" in capsys.readouterr().err
 
 
-@pytest.mark.parametrize("key, old_value, flag, other", [("ground_texture", "smooth", "--ground-texture", "detailed"),
-                                                         ("vehicle_texture", "plain", "--vehicle-texture", "detailed"),
-                                                         ("ahead_share", "0.0", "--ahead-share", "0.5")])
+@pytest.mark.parametrize(
+    "key, old_value, flag, other",
+    [
+        ("ground_texture", "smooth", "--ground-texture", "detailed"),
+        ("vehicle_texture", "plain", "--vehicle-texture", "detailed"),
+        ("ahead_share", "0.0", "--ahead-share", "0.5"),
+    ],
+)
 def test_datasets_made_before_a_texture_option_count_as_its_old_style(tmp_path, capsys, key, old_value, flag, other):
     ds = tmp_path / "ds"
     shown = float(old_value) if key == "ahead_share" else old_value

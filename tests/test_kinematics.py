@@ -27,7 +27,9 @@ def test_constant_speed_actor_travels_v_times_t():
 
 def test_braking_actor_stops_after_v2_over_2a_and_never_reverses():
     v0, a = 20.0, 5.0
-    sim = run_for(case(0, [{"vehicle": "car", "speed_kph": v0 * 3.6, "headway_m": 50, "decel_mps2": a}], threat=False), 8.0)
+    sim = run_for(
+        case(0, [{"vehicle": "car", "speed_kph": v0 * 3.6, "headway_m": 50, "decel_mps2": a}], threat=False), 8.0
+    )
     veh = sim.actors[0].vehicle
     x0 = 4.6 / 2 + 50 + sim.actors[0].spec.length_m / 2
     assert veh.speed == 0.0
@@ -55,8 +57,12 @@ def test_ego_actuator_delay_and_jerk_limit():
 @pytest.mark.parametrize("overlap_pct", [100, 75, 50, 25, -25, -50, -75, -100])
 def test_overlap_is_the_share_of_the_ego_width_whatever_the_target_width(vehicle, overlap_pct):
     # Euro NCAP: overlap is the share of the VUT's (ego's) width that overlaps the target
-    sim = ScenarioSim(case(50, [{"vehicle": vehicle, "headway_s": 5, "overlap_pct": overlap_pct}]), CameraConfig(),
-                      seed=0, render=False)  # fmt: skip
+    sim = ScenarioSim(
+        case(50, [{"vehicle": vehicle, "headway_s": 5, "overlap_pct": overlap_pct}]),
+        CameraConfig(),
+        seed=0,
+        render=False,
+    )
     actor = sim.actors[0]
     y_t, y_e = actor.vehicle.world_pose()[1], sim.ego.world_pose()[1]
     w_t, w_e = actor.spec.width_m, EGO_SIZE_M[1]

@@ -4,7 +4,7 @@ import math
 
 import pytest
 
-from sim.latency import CommandQueue, LatencyError, Job, next_job, parse_latency
+from sim.latency import CommandQueue, Job, LatencyError, next_job, parse_latency
 
 DT = 0.1  # [s]
 

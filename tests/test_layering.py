@@ -13,8 +13,12 @@ from bittc_core.errors import BittcError, CliError, ConfigError
 
 ROOT = Path(__file__).resolve().parents[1]
 #: the library: everything but the command line
-LIBRARY = [p for d in ("sim", "bittc_core", "scenarios", "controllers") for p in sorted((ROOT / d).rglob("*.py"))
-           if "cli" not in p.relative_to(ROOT).parts]  # fmt: skip
+LIBRARY = [
+    p
+    for d in ("sim", "bittc_core", "scenarios", "controllers")
+    for p in sorted((ROOT / d).rglob("*.py"))
+    if "cli" not in p.relative_to(ROOT).parts
+]
 FLAG = re.compile(r"(?<![\w-])--[a-z][a-z-]+")
 
 
@@ -24,10 +28,14 @@ def _imported(code: str) -> list[str]:
 
 
 def test_validating_a_scenario_imports_no_simulator_stack():
-    code = "import scenarios.spec, sys; print([m for m in ('gymnasium', 'cv2', 'pybullet', 'torch') if m in sys.modules])"
+    code = (
+        "import scenarios.spec, sys; print([m for m in ('gymnasium', 'cv2', 'pybullet', 'torch') if m in sys.modules])"
+    )
     assert _imported(code) == "[]"
-    code = ("import scenarios, sys; scenarios.bundled(); scenarios.load_file(scenarios.BUNDLED_DIR / 'ccrs.yaml'); "
-            "print([m for m in ('gymnasium', 'cv2', 'pybullet', 'torch') if m in sys.modules])")
+    code = (
+        "import scenarios, sys; scenarios.bundled(); scenarios.load_file(scenarios.BUNDLED_DIR / 'ccrs.yaml'); "
+        "print([m for m in ('gymnasium', 'cv2', 'pybullet', 'torch') if m in sys.modules])"
+    )
     assert _imported(code) == "[]"
 
 
@@ -75,8 +83,10 @@ def test_library_code_neither_raises_cli_errors_nor_names_flags():
         tree = ast.parse(path.read_text())
         rel = path.relative_to(ROOT)
         for node in ast.walk(tree):
-            if isinstance(node, ast.ImportFrom) and node.module and (
-                node.module.startswith("bittc_core.cli") or any(a.name == "CliError" for a in node.names)
+            if (
+                isinstance(node, ast.ImportFrom)
+                and node.module
+                and (node.module.startswith("bittc_core.cli") or any(a.name == "CliError" for a in node.names))
             ):
                 found.append(f"{rel}:{node.lineno}: imports from {node.module}")
         found += [f"{rel}:{line}: {text!r}" for line, text in _raised_strings(tree) if FLAG.search(text)]
@@ -87,8 +97,11 @@ def test_generation_config_names_the_field_and_the_cli_the_flag(tmp_path, capsys
     from bittc_core.cli import main
     from bittc_core.data.generate import GenerationConfig
 
-    for kw, field in ((dict(seed=-1), "seed -1"), (dict(clip_length=1), "clip_length 1"),
-                      (dict(ground_texture="gravel"), "ground_texture 'gravel'")):
+    for kw, field in (
+        (dict(seed=-1), "seed -1"),
+        (dict(clip_length=1), "clip_length 1"),
+        (dict(ground_texture="gravel"), "ground_texture 'gravel'"),
+    ):
         with pytest.raises(ConfigError, match=f"^{field}") as e:
             GenerationConfig(**kw)
         assert "--" not in str(e.value)

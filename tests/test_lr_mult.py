@@ -7,7 +7,7 @@ from bittc_core.cli import train_cmd
 from bittc_core.errors import CliError
 from bittc_core.model import BinaryTTCNet, get_config
 from bittc_core.train import TrainConfig
-from bittc_core.train.loop import param_groups
+from bittc_core.train.params import param_groups
 from tests.train_helpers import cli_args, fit_fixed_batch, make_trainer
 
 
@@ -49,7 +49,9 @@ def test_a_multiplied_module_takes_that_multiple_of_the_step(tmp_path):
 
 
 def test_cli_refuses_a_prefix_that_names_nothing_and_writes_nothing(tmp_path):
-    with pytest.raises(CliError, match=r"--lr-mult: .*starts with \['segnet.corr_'\] \(config 'tiny', --stage binary\)"):
+    with pytest.raises(
+        CliError, match=r"--lr-mult: .*starts with \['segnet.corr_'\] \(config 'tiny', --stage binary\)"
+    ):
         train_cmd.run(cli_args(tmp_path, "--lr-mult", "segnet.corr_=10"))
     # a module the stage freezes: refused before the first stage runs
     with pytest.raises(CliError, match=r"starts with \['segnet.head'\] .*--stage continuous --freeze-binary\)"):
@@ -63,8 +65,10 @@ def test_run_records_the_multipliers_and_resume_keeps_them(tmp_path):
     assert train_cmd.run(cli_args(tmp_path, "--lr-mult", "segnet.head=4")) == 0
     saved = yaml.safe_load((tmp_path / "m.config.yaml").read_text())
     assert saved["train_config"]["binary"]["lr_mults"] == [["segnet.head", 4.0]]
-    for extra, match in ((["--resume"], "with --lr-mult segnet.head=4, not no --lr-mult"),
-                         (["--resume", "--lr-mult", "segnet.head=2"], "not --lr-mult segnet.head=2")):
+    for extra, match in (
+        (["--resume"], "with --lr-mult segnet.head=4, not no --lr-mult"),
+        (["--resume", "--lr-mult", "segnet.head=2"], "not --lr-mult segnet.head=2"),
+    ):
         with pytest.raises(CliError, match=match):
             train_cmd.run(cli_args(tmp_path, *extra))
     assert train_cmd.run(cli_args(tmp_path, "--resume", "--lr-mult", "segnet.head=4", "--steps", "3")) == 0

@@ -5,8 +5,15 @@ import math
 import numpy as np
 import pytest
 
-from bittc_core.metrics import (MetricAccumulator, class_counts, inside_share_group, mid_terms,
-                                miou_thresholds_s, threshold_key, two_class_iou)
+from bittc_core.metrics import (
+    MetricAccumulator,
+    class_counts,
+    inside_share_group,
+    mid_terms,
+    miou_thresholds_s,
+    threshold_key,
+    two_class_iou,
+)
 from bittc_core.ttc import eta_to_tau, tau_to_eta
 
 
@@ -110,11 +117,22 @@ def test_breakdown_groups_pairs_by_inside_share():
     acc.add(truth, eta2, eta2, valid, actor)
     b = acc.result()["breakdown"]
     wrong = (0 + 99 / 100) / 2  # inside IoU 0, outside 99 / 100
-    assert b["by_inside_share"]["0"] == {"pairs": n, "miou": pytest.approx((3 * 1.0 + (n - 3) * wrong) / n),
-                                         "inside_iou": 0.0, "pairs_with_inside_union": n - 3,
-                                         "false_inside_px_median": 1.0, "false_inside_px_p90": 1.0}
-    assert b["by_inside_share"]["0-5%"] == {"pairs": n, "miou": 1.0, "inside_iou": 1.0, "pairs_with_inside_union": n,
-                                            "false_inside_px_median": 0.0, "false_inside_px_p90": 0.0}
+    assert b["by_inside_share"]["0"] == {
+        "pairs": n,
+        "miou": pytest.approx((3 * 1.0 + (n - 3) * wrong) / n),
+        "inside_iou": 0.0,
+        "pairs_with_inside_union": n - 3,
+        "false_inside_px_median": 1.0,
+        "false_inside_px_p90": 1.0,
+    }
+    assert b["by_inside_share"]["0-5%"] == {
+        "pairs": n,
+        "miou": 1.0,
+        "inside_iou": 1.0,
+        "pairs_with_inside_union": n,
+        "false_inside_px_median": 0.0,
+        "false_inside_px_p90": 0.0,
+    }
     assert b["by_inside_share"]["20-100%"]["pairs"] == 0 and math.isnan(b["by_inside_share"]["20-100%"]["miou"])
     by_t = list(b["miou_by_threshold_s"].values())
     assert by_t == pytest.approx([1.0] * 3 + [(wrong + 1.0) / 2] * (n - 3))
@@ -126,7 +144,7 @@ def test_breakdown_by_ego_speed():
     dt = 0.1
     acc = MetricAccumulator(dt_s=dt)
     assert "by_ego_speed_mps" not in acc.result()["breakdown"]  # no speeds given
-    k1 = len(acc.miou_thresholds_s) + list(acc.thresholds_s[len(acc.miou_thresholds_s):]).index(1.0)
+    k1 = len(acc.miou_thresholds_s) + list(acc.thresholds_s[len(acc.miou_thresholds_s) :]).index(1.0)
     valid = np.ones((4, 5), bool)
     instance = np.zeros((4, 5), np.int64)
     instance[0, 0] = 1  # an actor pixel: not static, left out of the static error
@@ -172,8 +190,19 @@ def test_eval_of_the_oracle_is_perfect_and_writes_json(tmp_path):
     from bittc_core.cli import eval_cmd
 
     out = tmp_path / "o.json"
-    a = argparse.Namespace(data="synthetic", method="oracle", weights=None, out=str(out), split="val",
-                           limit=2, device="cpu", tta="none", scenarios=None, backend="torch", onnx=None)
+    a = argparse.Namespace(
+        data="synthetic",
+        method="oracle",
+        weights=None,
+        out=str(out),
+        split="val",
+        limit=2,
+        device="cpu",
+        tta="none",
+        scenarios=None,
+        backend="torch",
+        onnx=None,
+    )
     assert eval_cmd.run(a) == 0
     r = json.loads(out.read_text())
     assert r["miou"] == pytest.approx(1.0) and r["mid"] == pytest.approx(0.0) and r["pairs"] == 2

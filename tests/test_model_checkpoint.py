@@ -9,9 +9,18 @@ import stat
 import pytest
 import torch
 
-from bittc_core.checkpoint import (DEFAULT_WEIGHTS, REQUIRED_KEYS, CheckpointError, build_network, grows_into,
-                                   init_network, load_checkpoint, make_payload, release_payload,
-                                   save_checkpoint)
+from bittc_core.checkpoint import (
+    DEFAULT_WEIGHTS,
+    REQUIRED_KEYS,
+    CheckpointError,
+    build_network,
+    grows_into,
+    init_network,
+    load_checkpoint,
+    make_payload,
+    release_payload,
+    save_checkpoint,
+)
 from bittc_core.model import BinaryTTCNet, get_config
 
 
@@ -93,12 +102,16 @@ def _make_correlation_last_live(net):
     net.segnet.corr_last.weight.fill_(0.5)  # into the finest decoder conv
 
 
-@pytest.mark.parametrize("source, grown, make_live", [
-    ("cpu-small", "cpu-small-gc", _make_context_live),
-    ("cpu-small", "cpu-medium", _make_decoder_block_live),
-    ("cpu-small", "cpu-small-corr", _make_correlation_first_live),
-    ("cpu-small", "cpu-small-corr", _make_correlation_last_live),
-    ("cpu-small-corr", "cpu-small-corr-gc", _make_context_live)])
+@pytest.mark.parametrize(
+    "source, grown, make_live",
+    [
+        ("cpu-small", "cpu-small-gc", _make_context_live),
+        ("cpu-small", "cpu-medium", _make_decoder_block_live),
+        ("cpu-small", "cpu-small-corr", _make_correlation_first_live),
+        ("cpu-small", "cpu-small-corr", _make_correlation_last_live),
+        ("cpu-small-corr", "cpu-small-corr-gc", _make_context_live),
+    ],
+)
 def test_init_grows_as_the_identity(tmp_path, source, grown, make_live):
     torch.manual_seed(0)
     plain = BinaryTTCNet(get_config(source)).eval()

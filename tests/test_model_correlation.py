@@ -30,8 +30,10 @@ def test_unpadded_computation_equals_the_padded_one():
     eta = torch.tensor([[0.7, 1.0, 1.2], [0.9, 0.95, 1.1]])
     step = 0.05
     out = scale_correlation(ref, src, eta, scale_warp(src, eta, grid), grid, 4, step)
-    expected = torch.cat([group_correlation(grid.pad(ref), scale_warp(src, eta * math.exp(o * step), grid), 4)
-                          for o in CORR_OFFSETS], dim=1)
+    expected = torch.cat(
+        [group_correlation(grid.pad(ref), scale_warp(src, eta * math.exp(o * step), grid), 4) for o in CORR_OFFSETS],
+        dim=1,
+    )
     assert out.shape == (6, 12, grid.hp, grid.wp)
     torch.testing.assert_close(out, expected)
 
@@ -42,14 +44,15 @@ def test_outer_warps_tell_the_side_of_the_threshold():
     g = torch.Generator().manual_seed(2)
     h, w = 24, 48
     # smooth random features: upsampled noise
-    src = torch.nn.functional.interpolate(torch.randn(1, 8, 6, 12, generator=g), size=(h, w),
-                                          mode="bicubic", align_corners=True)
+    src = torch.nn.functional.interpolate(
+        torch.randn(1, 8, 6, 12, generator=g), size=(h, w), mode="bicubic", align_corners=True
+    )
     grid = PaddedGrid.for_features(h, w, 1.5, 4)
     eta_true, step = 0.9, 0.05
     ref = grid.crop(scale_warp(src, torch.tensor([[eta_true]]), grid))
     eta = torch.tensor([[eta_true * math.exp(step), eta_true * math.exp(-step)]])
     corr = grid.crop(scale_correlation(ref, src, eta, scale_warp(src, eta, grid), grid, 2, step))
     groups = 2
-    low, high = corr[:, :groups].mean(dim=(1, 2, 3)), corr[:, 2 * groups:].mean(dim=(1, 2, 3))
+    low, high = corr[:, :groups].mean(dim=(1, 2, 3)), corr[:, 2 * groups :].mean(dim=(1, 2, 3))
     assert low[0] > high[0]  # threshold above the truth: the lower warp is the true one
     assert high[1] > low[1]  # threshold below the truth: the upper warp is

@@ -37,8 +37,9 @@ def test_forward_backward_shapes_and_gradients(net):
     assert cont.prob_le.shape == (b, net.config.cont_levels, H, W) and cont.log_eta.shape == (b, 1, H, W)
     (ttc.mean() + flow.mean() + cont.log_eta.mean()).backward()
     grads = {n: p.grad for n, p in net.named_parameters()}
-    assert all(g is not None and torch.isfinite(g).all() for g in grads.values()), \
-        [n for n, g in grads.items() if g is None]
+    assert all(g is not None and torch.isfinite(g).all() for g in grads.values()), [
+        n for n, g in grads.items() if g is None
+    ]
 
 
 def test_thresholds_batched_equal_one_at_a_time(net):
@@ -50,7 +51,7 @@ def test_thresholds_batched_equal_one_at_a_time(net):
     eta = torch.stack([torch.linspace(0.7, 1.1, k), torch.linspace(1.05, 0.75, k)])
     with torch.no_grad():
         together = net(prev, latest, eta)
-        alone = torch.cat([net(prev, latest, eta[:, i:i + 1]) for i in range(k)], dim=1)
+        alone = torch.cat([net(prev, latest, eta[:, i : i + 1]) for i in range(k)], dim=1)
     assert together.shape == (2, k, H, W)
     torch.testing.assert_close(together, alone, atol=1e-5, rtol=1e-4)
 

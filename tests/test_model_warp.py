@@ -10,8 +10,7 @@ H, W = 11, 17
 
 def ramp(a: float = 0.7, b: float = -1.3, c: float = 5.0) -> torch.Tensor:
     """f(x, y) = a x + b y + c, (1, 2, H, W) (second channel = 2 f): bilinear is exact on it."""
-    ys, xs = torch.meshgrid(torch.arange(H, dtype=torch.float64), torch.arange(W, dtype=torch.float64),
-                            indexing="ij")
+    ys, xs = torch.meshgrid(torch.arange(H, dtype=torch.float64), torch.arange(W, dtype=torch.float64), indexing="ij")
     f = a * xs + b * ys + c
     return torch.stack((f, 2 * f))[None], (a, b, c)
 
@@ -31,8 +30,7 @@ def test_scale_warp_matches_closed_form(eta):
     src, (a, b, c) = ramp()
     out = scale_warp(src, torch.tensor([[eta]], dtype=torch.float64), unpadded())
     cx, cy = (W - 1) / 2, (H - 1) / 2
-    ys, xs = torch.meshgrid(torch.arange(H, dtype=torch.float64), torch.arange(W, dtype=torch.float64),
-                            indexing="ij")
+    ys, xs = torch.meshgrid(torch.arange(H, dtype=torch.float64), torch.arange(W, dtype=torch.float64), indexing="ij")
     sx, sy = cx + eta * (xs - cx), cy + eta * (ys - cy)  # warped_src(x) = src(c + eta (x - c))
     inside = (sx >= 0) & (sx <= W - 1) & (sy >= 0) & (sy <= H - 1)
     expected = a * sx + b * sy + c
@@ -46,8 +44,7 @@ def test_shift_warp_matches_closed_form():
     src, (a, b, c) = ramp()
     u, v = 2.5, -1.25
     out = shift_warp(src, torch.tensor([[[u, v]]], dtype=torch.float64), unpadded())
-    ys, xs = torch.meshgrid(torch.arange(H, dtype=torch.float64), torch.arange(W, dtype=torch.float64),
-                            indexing="ij")
+    ys, xs = torch.meshgrid(torch.arange(H, dtype=torch.float64), torch.arange(W, dtype=torch.float64), indexing="ij")
     sx, sy = xs - u, ys - v  # warped_src(x) = src(x - s)
     inside = (sx >= 0) & (sx <= W - 1) & (sy >= 0) & (sy <= H - 1)
     torch.testing.assert_close(out[0, 0][inside], (a * sx + b * sy + c)[inside])
@@ -89,8 +86,14 @@ def test_stem_feature_pixel_i_sees_input_pixels_3i_to_3i_plus_2():
     from bittc_core.model.extractor import FeatExtractNet
 
     cfg = get_config("tiny")
-    net = FeatExtractNet(stem_channels=cfg.stem_channels, out_channels=cfg.feat_channels, res_blocks=1,
-                         pool_sizes=cfg.spp_pool_sizes, spp_channels=cfg.spp_channels, norm="none").eval()
+    net = FeatExtractNet(
+        stem_channels=cfg.stem_channels,
+        out_channels=cfg.feat_channels,
+        res_blocks=1,
+        pool_sizes=cfg.spp_pool_sizes,
+        spp_channels=cfg.spp_channels,
+        norm="none",
+    ).eval()
     stem = net.stem[0][0]
     base = torch.zeros(1, 3, 12, 12)
     out0 = stem(base)

@@ -9,11 +9,13 @@ from bittc_core.data.npz_writer import save_npz
 
 def _arrays(seed: int) -> dict[str, np.ndarray]:
     rng = np.random.default_rng(seed)
-    return {"eta": rng.normal(1.0, 0.1, (1, 6, 9)).astype(np.float32),
-            "flow_px": rng.normal(0.0, 3.0, (1, 6, 9, 2)).astype(np.float32),
-            "instance": rng.integers(-1, 5, (1, 6, 9)).astype(np.int16),
-            "valid": rng.random((1, 6, 9)) > 0.2,
-            "empty": np.zeros((0, 3), np.float32)}
+    return {
+        "eta": rng.normal(1.0, 0.1, (1, 6, 9)).astype(np.float32),
+        "flow_px": rng.normal(0.0, 3.0, (1, 6, 9, 2)).astype(np.float32),
+        "instance": rng.integers(-1, 5, (1, 6, 9)).astype(np.int16),
+        "valid": rng.random((1, 6, 9)) > 0.2,
+        "empty": np.zeros((0, 3), np.float32),
+    }
 
 
 def test_numpy_reads_what_was_written(tmp_path):

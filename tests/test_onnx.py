@@ -136,8 +136,17 @@ def test_cli_says_how_to_install_onnxruntime(tmp_path, capsys, monkeypatch):
 
     cv2.imwrite(str(tmp_path / "a.png"), a)
     cv2.imwrite(str(tmp_path / "b.png"), b)
-    argv = ["predict", str(tmp_path / "a.png"), str(tmp_path / "b.png"), "--backend", "onnxruntime",
-            "--onnx", str(tmp_path), "--out", str(tmp_path / "out")]  # fmt: skip
+    argv = [
+        "predict",
+        str(tmp_path / "a.png"),
+        str(tmp_path / "b.png"),
+        "--backend",
+        "onnxruntime",
+        "--onnx",
+        str(tmp_path),
+        "--out",
+        str(tmp_path / "out"),
+    ]
     assert main(argv) == 2
     assert "pip install -e '.[onnx]'" in capsys.readouterr().err
     assert not (tmp_path / "out").exists()

@@ -56,13 +56,43 @@ def test_predict_writes_the_maps_of_the_estimator(pair, tmp_path, capsys):
 
 def test_predict_resizes_and_runs_the_flow_baseline(pair, tmp_path):
     out = tmp_path / "flow"
-    assert main(["predict", str(pair / "prev.png"), str(pair / "latest.png"), "--out", str(out),
-                 "--method", "flow", "--size", "48x144", "--tau", "1"]) == 0
+    assert (
+        main(
+            [
+                "predict",
+                str(pair / "prev.png"),
+                str(pair / "latest.png"),
+                "--out",
+                str(out),
+                "--method",
+                "flow",
+                "--size",
+                "48x144",
+                "--tau",
+                "1",
+            ]
+        )
+        == 0
+    )
     z = np.load(out / "prediction.npz")
     assert z["geofence"].shape == (1, 48, 144)
     # the whole frame approaches at tau = 1 s: the baseline puts the inner image inside 1.5 s
-    assert main(["predict", str(pair / "prev.png"), str(pair / "latest.png"), "--out", str(out),
-                 "--method", "flow", "--tau", "1.5"]) == 0
+    assert (
+        main(
+            [
+                "predict",
+                str(pair / "prev.png"),
+                str(pair / "latest.png"),
+                "--out",
+                str(out),
+                "--method",
+                "flow",
+                "--tau",
+                "1.5",
+            ]
+        )
+        == 0
+    )
     inner = np.load(out / "prediction.npz")["geofence"][0, 24:72, 72:216]
     assert (inner > 0.5).mean() > 0.8
 
@@ -79,22 +109,25 @@ def test_geofence_overlay_paints_the_shortest_threshold_on_top(alpha):
     assert out[:, 0].tolist() == [[0, 0, 0], [0, 0, 0]]
 
 
-@pytest.mark.parametrize("files, extra, needle", [
-    (("missing.png", "latest.png"), [], "PREV"),
-    (("prev.png", "text.png"), [], "not an image"),
-    (("small.png", "latest.png"), [], "the same size"),
-    (("prev.png", "latest.png"), ["--tau", "0.05"], "0.05 s outside the trained range"),
-    (("prev.png", "latest.png"), ["--tau", "1", "1"], "given twice"),
-    (("prev.png", "latest.png"), ["--size", "95x288"], "multiples of 3"),
-    (("prev.png", "latest.png"), ["--method", "oracle"], "invalid choice: 'oracle'"),
-    (("prev.png", "latest.png"), ["--method", "flow", "--tta", "flip"], "--method bittc"),
-    (("prev.png", "latest.png"), ["--tta", "both"], "invalid choice: 'both'"),
-    (("prev.png", "latest.png"), ["--method", "flow", "--device", "cuda"], "--method bittc"),
-    (("prev.png", "latest.png"), ["--size", "8x8", "--method", "flow"], "--size"),
-    (("tiny.png", "tiny.png"), ["--method", "flow"], "6x6 px; height must be in [16"),
-    (("odd.png", "odd.png"), [], "95x288 px; the network needs height and width in multiples of 3"),
-    (("prev.png", "latest.png"), ["--tau", "nan"], "threshold nan s"),
-])
+@pytest.mark.parametrize(
+    "files, extra, needle",
+    [
+        (("missing.png", "latest.png"), [], "PREV"),
+        (("prev.png", "text.png"), [], "not an image"),
+        (("small.png", "latest.png"), [], "the same size"),
+        (("prev.png", "latest.png"), ["--tau", "0.05"], "0.05 s outside the trained range"),
+        (("prev.png", "latest.png"), ["--tau", "1", "1"], "given twice"),
+        (("prev.png", "latest.png"), ["--size", "95x288"], "multiples of 3"),
+        (("prev.png", "latest.png"), ["--method", "oracle"], "invalid choice: 'oracle'"),
+        (("prev.png", "latest.png"), ["--method", "flow", "--tta", "flip"], "--method bittc"),
+        (("prev.png", "latest.png"), ["--tta", "both"], "invalid choice: 'both'"),
+        (("prev.png", "latest.png"), ["--method", "flow", "--device", "cuda"], "--method bittc"),
+        (("prev.png", "latest.png"), ["--size", "8x8", "--method", "flow"], "--size"),
+        (("tiny.png", "tiny.png"), ["--method", "flow"], "6x6 px; height must be in [16"),
+        (("odd.png", "odd.png"), [], "95x288 px; the network needs height and width in multiples of 3"),
+        (("prev.png", "latest.png"), ["--tau", "nan"], "threshold nan s"),
+    ],
+)
 def test_predict_bad_input_exits_2_and_writes_nothing(pair, tmp_path, capsys, files, extra, needle):
     out = tmp_path / "o"
     assert main(["predict", *(str(pair / f) for f in files), "--out", str(out), *extra]) == 2

@@ -12,10 +12,18 @@ from sim.latency import LatencyError, named_profiles, parse_latency
 from sim.profile_file import fit_latency, read_profile_file
 
 GOOD = {
-    "name": "test-device", "a_ms": 30.0, "b_ms": 20.0, "continuous_ms": 400.0, "measured": True,
-    "source": "written by the test", "timings_ms": {"binary": {1: 50.0, 2: 70.0, 4: 110.0}, "continuous": 400.0},
-    "backend": "torch", "size_px": [96, 288], "threads": 2, "date": "2026-12-02",
-}  # fmt: skip
+    "name": "test-device",
+    "a_ms": 30.0,
+    "b_ms": 20.0,
+    "continuous_ms": 400.0,
+    "measured": True,
+    "source": "written by the test",
+    "timings_ms": {"binary": {1: 50.0, 2: 70.0, 4: 110.0}, "continuous": 400.0},
+    "backend": "torch",
+    "size_px": [96, 288],
+    "threads": 2,
+    "date": "2026-12-02",
+}
 
 
 def _write(tmp_path, doc, name="p.yaml"):
@@ -73,8 +81,18 @@ def test_the_shipped_measured_profile_is_a_profile_file():
 def test_run_charges_what_the_file_predicts(tmp_path):
     path = _write(tmp_path, GOOD)
     out = tmp_path / "run"
-    argv = ["run", "CCRs-20", "--controller", "geofence", "--num-alphas", "4", "--latency", f"profile:{path}",
-            "--out", str(out)]  # fmt: skip
+    argv = [
+        "run",
+        "CCRs-20",
+        "--controller",
+        "geofence",
+        "--num-alphas",
+        "4",
+        "--latency",
+        f"profile:{path}",
+        "--out",
+        str(out),
+    ]
     assert main(argv) == 0
     rows = list(csv.DictReader((out / "trace.csv").open()))
     lat = {float(r["latency_ms"]) for r in rows if r["latency_ms"] not in ("", "nan")}

@@ -30,8 +30,25 @@ def test_a_silent_estimator_never_covers_the_target():
 
 def test_cli_scenario_eval_writes_json_table_and_plot(tmp_path, capsys):
     out, plot = tmp_path / "e.json", tmp_path / "share.png"
-    assert main(["eval", "--scenarios", "CCRs-40", "--method", "flow", "--tau", "1.6", "2.4", "--out", str(out),
-                 "--plot", str(plot)]) == 0
+    assert (
+        main(
+            [
+                "eval",
+                "--scenarios",
+                "CCRs-40",
+                "--method",
+                "flow",
+                "--tau",
+                "1.6",
+                "2.4",
+                "--out",
+                str(out),
+                "--plot",
+                str(plot),
+            ]
+        )
+        == 0
+    )
     r = json.loads(out.read_text())
     assert r["thresholds_s"] == [1.6, 2.4] and set(r["fence_lag_s"]) == {"1.6", "2.4"}
     assert "CCRs-40" in r["per_case"] and r["inside_share_by_tau"]["2.4"]

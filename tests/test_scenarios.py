@@ -1,7 +1,5 @@
 """Closed-loop outcomes of the bundled scenarios, determinism, and scenario validation."""
 
-import json
-
 import pytest
 import yaml
 
@@ -96,8 +94,12 @@ def test_malformed_yaml(tmp_path):
 
 @pytest.mark.parametrize(
     "road,needle",
-    [({"barrier": "no"}, "road.barrier = 'no'"), ({"lanes_left": 1.5}, "road.lanes_left = 1.5"),
-     ({"x_end_m": 50}, "x_end_m"), ({"lane_width_m": [3, 4]}, "road.lane_width_m")],
+    [
+        ({"barrier": "no"}, "road.barrier = 'no'"),
+        ({"lanes_left": 1.5}, "road.lanes_left = 1.5"),
+        ({"x_end_m": 50}, "x_end_m"),
+        ({"lane_width_m": [3, 4]}, "road.lane_width_m"),
+    ],
 )
 def test_bad_road_fields_are_rejected(tmp_path, road, needle):
     raw = {"name": "x", "threat": True, "ego": {"speed_kph": 50}, "road": road, "actors": []}
@@ -110,13 +112,23 @@ def test_bad_road_fields_are_rejected(tmp_path, road, needle):
 
 @pytest.mark.parametrize(
     "patch,needle",
-    [({"name": 123}, "name = 123"), ({"case_name": 5}, "case_name = 5"), ({"name": None}, "name = None"),
-     ({"case_name": ""}, "case_name = ''"), ({"case_name": "{"}, "case_name = '{'"),
-     ({"description": 7}, "description = 7")],
+    [
+        ({"name": 123}, "name = 123"),
+        ({"case_name": 5}, "case_name = 5"),
+        ({"name": None}, "name = None"),
+        ({"case_name": ""}, "case_name = ''"),
+        ({"case_name": "{"}, "case_name = '{'"),
+        ({"description": 7}, "description = 7"),
+    ],
 )
 def test_non_string_names_are_rejected_naming_the_key(tmp_path, patch, needle):
-    raw = {"name": "x", "threat": True, "ego": {"speed_kph": 50}, "actors": [{"vehicle": "gvt", "headway_s": 5}],
-           **patch}
+    raw = {
+        "name": "x",
+        "threat": True,
+        "ego": {"speed_kph": 50},
+        "actors": [{"vehicle": "gvt", "headway_s": 5}],
+        **patch,
+    }
     f = tmp_path / "bad.yaml"
     f.write_text(yaml.safe_dump(raw))
     with pytest.raises(ConfigError) as e:
@@ -126,15 +138,28 @@ def test_non_string_names_are_rejected_naming_the_key(tmp_path, patch, needle):
 
 @pytest.mark.parametrize(
     "patch,key",
-    [({"duration_s": [10, 12]}, "duration_s"), ({"traffic": [0, 2]}, "traffic"), ({"threat": [True, False]}, "threat"),
-     ({"name": ["a", "b"]}, "name"), ({"case_name": ["a", "b"]}, "case_name"), ({"description": ["a"]}, "description"),
-     ({"road": {"lane_width_m": [3.0, 4.0]}}, "road.lane_width_m"),
-     ({"actors": [{"vehicle": "gvt", "headway_s": 5, "lane_change": {"start_s": [1, 2], "to_lane": 1}}]},
-      "actors[0].lane_change.start_s")],
+    [
+        ({"duration_s": [10, 12]}, "duration_s"),
+        ({"traffic": [0, 2]}, "traffic"),
+        ({"threat": [True, False]}, "threat"),
+        ({"name": ["a", "b"]}, "name"),
+        ({"case_name": ["a", "b"]}, "case_name"),
+        ({"description": ["a"]}, "description"),
+        ({"road": {"lane_width_m": [3.0, 4.0]}}, "road.lane_width_m"),
+        (
+            {"actors": [{"vehicle": "gvt", "headway_s": 5, "lane_change": {"start_s": [1, 2], "to_lane": 1}}]},
+            "actors[0].lane_change.start_s",
+        ),
+    ],
 )
 def test_a_list_outside_ego_and_actor_fields_is_refused(tmp_path, patch, key):
-    raw = {"name": "x", "threat": True, "ego": {"speed_kph": 50}, "actors": [{"vehicle": "gvt", "headway_s": 5}],
-           **patch}
+    raw = {
+        "name": "x",
+        "threat": True,
+        "ego": {"speed_kph": 50},
+        "actors": [{"vehicle": "gvt", "headway_s": 5}],
+        **patch,
+    }
     f = tmp_path / "bad.yaml"
     f.write_text(yaml.safe_dump(raw))
     with pytest.raises(ConfigError) as e:
@@ -145,9 +170,14 @@ def test_a_list_outside_ego_and_actor_fields_is_refused(tmp_path, patch, key):
 def test_lists_in_ego_and_actor_fields_expand_into_a_sweep():
     from scenarios.spec import expand
 
-    raw = {"name": "x", "threat": True, "ego": {"speed_kph": [30, 50]},
-           "actors": [{"vehicle": ["gvt", "truck"], "headway_s": 5, "overlap_pct": [50, -50]}]}
+    raw = {
+        "name": "x",
+        "threat": True,
+        "ego": {"speed_kph": [30, 50]},
+        "actors": [{"vehicle": ["gvt", "truck"], "headway_s": 5, "overlap_pct": [50, -50]}],
+    }
     cases = expand(raw, "<test>")
     assert len(cases) == 8
     assert {(c.ego.speed_kph, c.actors[0].vehicle, c.actors[0].overlap_pct) for c in cases} == {
-        (v, k, o) for v in (30.0, 50.0) for k in ("gvt", "truck") for o in (50.0, -50.0)}
+        (v, k, o) for v in (30.0, 50.0) for k in ("gvt", "truck") for o in (50.0, -50.0)
+    }

@@ -102,8 +102,9 @@ def test_cli_says_how_to_install_ray(tmp_path, capsys, monkeypatch):
 
 
 def test_plan_lists_every_run_once_in_a_fixed_order(tiny):
-    s = _settings(tiny, controllers=("geofence", "oracle"), num_alphas=(1, 4), latencies=("fixed:50", "measured"),
-                  seeds=2)  # fmt: skip
+    s = _settings(
+        tiny, controllers=("geofence", "oracle"), num_alphas=(1, 4), latencies=("fixed:50", "measured"), seeds=2
+    )
     plan = plan_runs(s, check_settings(s))
     # 2 cases x (geofence: 2 K + oracle: 1) x 2 latency modes x 2 seeds
     assert len(plan) == 2 * 3 * 2 * 2
@@ -189,14 +190,29 @@ def test_one_and_two_workers_give_identical_results(tiny, tmp_path):
 
 
 def test_resume_after_a_kill_gives_the_same_results(tiny, tmp_path):
-    args = ["--suite", tiny, "--controllers", "oracle", "none", "geofence", "--num-alphas", "1",
-            "--latency", "fixed:50", "fixed:100"]  # fmt: skip
+    args = [
+        "--suite",
+        tiny,
+        "--controllers",
+        "oracle",
+        "none",
+        "geofence",
+        "--num-alphas",
+        "1",
+        "--latency",
+        "fixed:50",
+        "fixed:100",
+    ]
     whole = tmp_path / "whole"
     assert main(["sweep", *args, "--out", str(whole)]) == 0
     cut = tmp_path / "cut"
     env = dict(os.environ, SDL_VIDEODRIVER="dummy")
-    proc = subprocess.Popen([sys.executable, "-m", "bittc_core.cli", "sweep", *args, "--out", str(cut)],
-                            env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)  # fmt: skip
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "bittc_core.cli", "sweep", *args, "--out", str(cut)],
+        env=env,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
     deadline = time.monotonic() + 120
     while time.monotonic() < deadline and not list(cut.glob("runs/*/*/summary.json")):
         time.sleep(0.02)
@@ -214,8 +230,18 @@ def test_a_failing_run_is_recorded_and_the_sweep_goes_on(tiny, tmp_path, capsys)
     ctrl = tmp_path / "raising.py"
     ctrl.write_text(RAISING)
     out = tmp_path / "sw"
-    argv = ["sweep", "--suite", tiny, "--controllers", "oracle", f"{ctrl}:Raising", "--latency", "fixed:50",
-            "--out", str(out)]  # fmt: skip
+    argv = [
+        "sweep",
+        "--suite",
+        tiny,
+        "--controllers",
+        "oracle",
+        f"{ctrl}:Raising",
+        "--latency",
+        "fixed:50",
+        "--out",
+        str(out),
+    ]
     assert main(argv) == 1
     err = capsys.readouterr().err
     assert "2 run(s) failed" in err and "Raising" in err
@@ -265,11 +291,33 @@ def test_results_have_the_documented_columns(tiny, tmp_path):
 
     run_sweep(_settings(tiny, controllers=("oracle",)), tmp_path / "sw", progress=False)
     header = next(csv.reader((tmp_path / "sw" / "results.csv").open()))
-    for col in ("controller", "num_alphas", "thresholds_s", "latency_mode", "seed", "folder", "collision",
-                "relative_impact_speed_kph", "ttc_at_first_warning_s", "false_alarm", "ncap_band", "error"):  # fmt: skip
+    for col in (
+        "controller",
+        "num_alphas",
+        "thresholds_s",
+        "latency_mode",
+        "seed",
+        "folder",
+        "collision",
+        "relative_impact_speed_kph",
+        "ttc_at_first_warning_s",
+        "false_alarm",
+        "ncap_band",
+        "error",
+    ):
         assert col in header
     summary = next(csv.reader((tmp_path / "sw" / "summary.csv").open()))
-    for col in ("controller", "num_alphas", "latency_mode", "threats_avoided", "threats", "fcw_pass_rate",
-                "false_alarms", "latency_ms_mean", "latency_ms_p95", "frames_skipped_share"):  # fmt: skip
+    for col in (
+        "controller",
+        "num_alphas",
+        "latency_mode",
+        "threats_avoided",
+        "threats",
+        "fcw_pass_rate",
+        "false_alarms",
+        "latency_ms_mean",
+        "latency_ms_p95",
+        "frames_skipped_share",
+    ):
         assert col in summary
     assert Path(tmp_path / "sw" / "report.html").stat().st_size > 1000

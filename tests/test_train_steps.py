@@ -8,20 +8,28 @@ import torch
 
 from bittc_core.cli import train_cmd
 from bittc_core.errors import CliError
-from bittc_core.train import TrainConfig
 from bittc_core.metrics import class_counts, two_class_iou
+from bittc_core.train import TrainConfig
 from bittc_core.train.losses import lovasz_two_class, masked_bce
 from bittc_core.train.targets import PIXEL_THRESHOLD_JITTER, eta_labels, sample_eta_at_pixels, shift_labels
 from bittc_core.ttc import tau_to_eta
 from tests.train_helpers import cli_args, fit_fixed_batch, make_trainer
 
 
-@pytest.mark.parametrize("stage, actor_weight, lovasz_weight, pixel_share",
-                         [("flow", 1.0, 0.0, 0.0), ("binary", 1.0, 0.0, 0.0), ("binary", 3.0, 0.0, 0.0),
-                          ("binary", 1.0, 0.5, 0.0), ("binary", 1.0, 0.0, 0.5)])
+@pytest.mark.parametrize(
+    "stage, actor_weight, lovasz_weight, pixel_share",
+    [
+        ("flow", 1.0, 0.0, 0.0),
+        ("binary", 1.0, 0.0, 0.0),
+        ("binary", 3.0, 0.0, 0.0),
+        ("binary", 1.0, 0.5, 0.0),
+        ("binary", 1.0, 0.0, 0.5),
+    ],
+)
 def test_a_few_steps_lower_the_loss(tmp_path, stage, actor_weight, lovasz_weight, pixel_share):
-    tr = make_trainer(tmp_path, stage, actor_weight=actor_weight, lovasz_weight=lovasz_weight,
-                      pixel_threshold_share=pixel_share)
+    tr = make_trainer(
+        tmp_path, stage, actor_weight=actor_weight, lovasz_weight=lovasz_weight, pixel_threshold_share=pixel_share
+    )
     losses = fit_fixed_batch(tr, next(iter(tr.loader)), 30)  # one fixed batch: the loss must go down on it
     assert sum(losses[-3:]) / 3 < 0.8 * sum(losses[:3]) / 3, losses
 
@@ -195,9 +203,11 @@ def test_lovasz_equals_the_two_class_iou_loss_at_hard_predictions():
     mask = torch.rand(3, 1, 9, 11, generator=gen) < 0.9
     mask[1] = True
     logits = 40.0 * (2.0 * pred - 1.0)  # saturated: sigmoid 0 or 1
-    expected = [1.0 - two_class_iou(class_counts(pred[i, k].bool().numpy(), labels[i, k].bool().numpy(),
-                                                 mask[i, 0].numpy()))
-                for i in range(3) for k in range(2)]
+    expected = [
+        1.0 - two_class_iou(class_counts(pred[i, k].bool().numpy(), labels[i, k].bool().numpy(), mask[i, 0].numpy()))
+        for i in range(3)
+        for k in range(2)
+    ]
     assert expected[2] == pytest.approx(1.0 - 0.5 * (1.0 - 1 / 99))
     assert lovasz_two_class(logits, labels, mask).item() == pytest.approx(sum(expected) / 6, abs=1e-5)
     # perfect predictions: zero
@@ -214,43 +224,70 @@ def test_labels():
 
 
 def args(**kw):
-    base = dict(data="synthetic", config="tiny", out="m.pt", resume=False, init=None, seed=0, steps=10,
-                batch_size=2, lr=3e-4, warmup_steps=2, val_every=5, val_limit=4, device="cpu", stage="binary",
-                freeze_binary=False, actor_weight=1.0, inpath_weight=1.0, lovasz_weight=0.0, teacher=None, distill_weight=None,
-                pixel_thresholds=0.0, lr_mult=[], keep_checkpoints=False)
+    base = dict(
+        data="synthetic",
+        config="tiny",
+        out="m.pt",
+        resume=False,
+        init=None,
+        seed=0,
+        steps=10,
+        batch_size=2,
+        lr=3e-4,
+        warmup_steps=2,
+        val_every=5,
+        val_limit=4,
+        device="cpu",
+        stage="binary",
+        freeze_binary=False,
+        actor_weight=1.0,
+        inpath_weight=1.0,
+        lovasz_weight=0.0,
+        teacher=None,
+        distill_weight=None,
+        pixel_thresholds=0.0,
+        lr_mult=[],
+        keep_checkpoints=False,
+    )
     base.update(kw)
     return argparse.Namespace(**base)
 
 
-@pytest.mark.parametrize("kw, match", [
-    (dict(config="huge"), "--config 'huge'"),
-    (dict(stage="fast"), "--stage 'fast'"),
-    (dict(steps=0), "--steps 0"),
-    (dict(batch_size=-2), "--batch-size -2"),
-    (dict(lr=5.0), "--lr 5.0"),
-    (dict(warmup_steps=-1), "--warmup-steps -1"),
-    (dict(out="model.bin"), "model.bin"),
-    (dict(device="tpu"), "--device 'tpu'"),
-    (dict(seed=-1), "--seed -1"),
-    (dict(resume=True, init="x.pt"), "exclude"),
-    (dict(actor_weight=0.0), "--actor-weight 0.0"),
-    (dict(inpath_weight=-2.0), "--inpath-weight -2.0"),
-    (dict(lovasz_weight=-1.0), "--lovasz-weight -1.0"),
-    (dict(freeze_binary=True), "--freeze-binary applies to the continuous stage, not --stage 'binary'"),
-    (dict(teacher="missing.pt"), "--teacher 'missing.pt': no such file"),
-    (dict(teacher="missing.pt", stage="continuous"), "--teacher applies to --stage binary, not --stage 'continuous'"),
-    (dict(teacher="missing.pt", stage="all"), "--teacher applies to --stage binary, not --stage 'all'"),
-    (dict(lovasz_weight=float("inf")), "--lovasz-weight inf"),
-    (dict(distill_weight=0.5), "--distill-weight needs --teacher"),
-    (dict(pixel_thresholds=1.5), "--pixel-thresholds 1.5"),
-    (dict(pixel_thresholds=float("nan")), "--pixel-thresholds nan"),
-    (dict(lr_mult=["segnet.corr_"]), "--lr-mult 'segnet.corr_': expected PREFIX=M"),
-    (dict(lr_mult=["=3"]), "--lr-mult '=3'"),
-    (dict(lr_mult=["segnet.=0"]), "--lr-mult 'segnet.=0'"),
-    (dict(lr_mult=["segnet.=x"]), "--lr-mult 'segnet.=x'"),
-    (dict(lr_mult=["segnet.=inf"]), "--lr-mult 'segnet.=inf'"),
-    (dict(lr_mult=["segnet.=2", "segnet.=3"]), "prefix 'segnet.' given twice"),
-])
+@pytest.mark.parametrize(
+    "kw, match",
+    [
+        (dict(config="huge"), "--config 'huge'"),
+        (dict(stage="fast"), "--stage 'fast'"),
+        (dict(steps=0), "--steps 0"),
+        (dict(batch_size=-2), "--batch-size -2"),
+        (dict(lr=5.0), "--lr 5.0"),
+        (dict(warmup_steps=-1), "--warmup-steps -1"),
+        (dict(out="model.bin"), "model.bin"),
+        (dict(device="tpu"), "--device 'tpu'"),
+        (dict(seed=-1), "--seed -1"),
+        (dict(resume=True, init="x.pt"), "exclude"),
+        (dict(actor_weight=0.0), "--actor-weight 0.0"),
+        (dict(inpath_weight=-2.0), "--inpath-weight -2.0"),
+        (dict(lovasz_weight=-1.0), "--lovasz-weight -1.0"),
+        (dict(freeze_binary=True), "--freeze-binary applies to the continuous stage, not --stage 'binary'"),
+        (dict(teacher="missing.pt"), "--teacher 'missing.pt': no such file"),
+        (
+            dict(teacher="missing.pt", stage="continuous"),
+            "--teacher applies to --stage binary, not --stage 'continuous'",
+        ),
+        (dict(teacher="missing.pt", stage="all"), "--teacher applies to --stage binary, not --stage 'all'"),
+        (dict(lovasz_weight=float("inf")), "--lovasz-weight inf"),
+        (dict(distill_weight=0.5), "--distill-weight needs --teacher"),
+        (dict(pixel_thresholds=1.5), "--pixel-thresholds 1.5"),
+        (dict(pixel_thresholds=float("nan")), "--pixel-thresholds nan"),
+        (dict(lr_mult=["segnet.corr_"]), "--lr-mult 'segnet.corr_': expected PREFIX=M"),
+        (dict(lr_mult=["=3"]), "--lr-mult '=3'"),
+        (dict(lr_mult=["segnet.=0"]), "--lr-mult 'segnet.=0'"),
+        (dict(lr_mult=["segnet.=x"]), "--lr-mult 'segnet.=x'"),
+        (dict(lr_mult=["segnet.=inf"]), "--lr-mult 'segnet.=inf'"),
+        (dict(lr_mult=["segnet.=2", "segnet.=3"]), "prefix 'segnet.' given twice"),
+    ],
+)
 def test_train_flags_are_validated(kw, match):
     with pytest.raises(CliError, match=match):
         train_cmd._check(args(**kw))
@@ -267,8 +304,20 @@ def test_config_yaml_records_each_stage_as_it_runs(tmp_path):
     import yaml
 
     out = tmp_path / "m.pt"
-    assert train_cmd.run(args(out=str(out), stage="continuous", freeze_binary=True, steps=2, val_every=2,
-                              val_limit=2, actor_weight=2.0)) == 0
+    assert (
+        train_cmd.run(
+            args(
+                out=str(out),
+                stage="continuous",
+                freeze_binary=True,
+                steps=2,
+                val_every=2,
+                val_limit=2,
+                actor_weight=2.0,
+            )
+        )
+        == 0
+    )
     saved = yaml.safe_load((tmp_path / "m.config.yaml").read_text())
     assert saved["stages"] == ["continuous"]
     cfg = saved["train_config"]["continuous"]

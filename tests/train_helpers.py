@@ -13,15 +13,25 @@ from bittc_core.train import RunPaths, TrainConfig, Trainer
 SMALL = SyntheticConfig(height_px=48, width_px=96, patch_half_size_px=(6.0, 20.0), max_translation_px=6.0)
 
 
-def make_trainer(tmp_path, stage: str = "binary", steps: int = 30, *, net_seed: int = 0,
-                 teacher: BinaryTTCNet | None = None, **kw) -> Trainer:
+def make_trainer(
+    tmp_path, stage: str = "binary", steps: int = 30, *, net_seed: int = 0, teacher: BinaryTTCNet | None = None, **kw
+) -> Trainer:
     """A trainer of a ``tiny`` network (weights drawn with ``net_seed``) on 16 synthetic pairs."""
-    cfg = TrainConfig(stage=stage, steps=steps, batch_size=4, lr=3e-3, warmup_steps=3,
-                      val_every=steps, val_limit=4, log_every=5, **kw)
+    cfg = TrainConfig(
+        stage=stage, steps=steps, batch_size=4, lr=3e-3, warmup_steps=3, val_every=steps, val_limit=4, log_every=5, **kw
+    )
     torch.manual_seed(net_seed)
     net = BinaryTTCNet(get_config("tiny"))
-    return Trainer(net, "tiny", cfg, SyntheticPairs(16, SMALL, seed=1), SyntheticPairs(4, SMALL, seed=2),
-                   torch.device("cpu"), RunPaths.from_out(tmp_path / "m.pt"), teacher=teacher)
+    return Trainer(
+        net,
+        "tiny",
+        cfg,
+        SyntheticPairs(16, SMALL, seed=1),
+        SyntheticPairs(4, SMALL, seed=2),
+        torch.device("cpu"),
+        RunPaths.from_out(tmp_path / "m.pt"),
+        teacher=teacher,
+    )
 
 
 def fit_fixed_batch(tr: Trainer, batch: dict, steps: int) -> list[float]:
@@ -45,6 +55,25 @@ def cli_args(tmp_path, *extra) -> argparse.Namespace:
 
     parser = argparse.ArgumentParser()
     train_cmd.add_parser(parser.add_subparsers())
-    return parser.parse_args(["train", "--data", "synthetic", "--config", "tiny", "--out", str(tmp_path / "m.pt"),
-                              "--steps", "2", "--val-every", "2", "--val-limit", "2", "--batch-size", "2",
-                              "--device", "cpu", *extra])
+    return parser.parse_args(
+        [
+            "train",
+            "--data",
+            "synthetic",
+            "--config",
+            "tiny",
+            "--out",
+            str(tmp_path / "m.pt"),
+            "--steps",
+            "2",
+            "--val-every",
+            "2",
+            "--val-limit",
+            "2",
+            "--batch-size",
+            "2",
+            "--device",
+            "cpu",
+            *extra,
+        ]
+    )

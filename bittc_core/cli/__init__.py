@@ -2,8 +2,9 @@
 
 Each subcommand lives in its own module of this package and exposes
 ``add_parser(subparsers) -> argparse.ArgumentParser`` and ``run(args) -> int``.
-Errors meant for the user are raised as :class:`CliError`; ``main`` prints them on
-one line to stderr and exits with status 2.
+The library raises :class:`bittc_core.errors.ConfigError` (naming the bad value) and the
+subcommands :class:`CliError` (naming the flag); ``main`` prints either on one line to
+stderr and exits with status 2.
 """
 
 from __future__ import annotations
@@ -36,6 +37,7 @@ COMMANDS: dict[str, str] = {
     "export": "bittc_core.cli.export_cmd",
     "sweep": "bittc_core.cli.sweep_cmd",
     "demo": "bittc_core.cli.demo_cmd",
+    "weights": "bittc_core.cli.weights_cmd",
 }
 
 
@@ -45,7 +47,7 @@ def build_parser() -> argparse.ArgumentParser:
         description="Closed-loop camera collision-warning simulator built around Binary TTC.",
     )
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
-    for name, module_name in COMMANDS.items():
+    for module_name in COMMANDS.values():
         module = importlib.import_module(module_name)
         p = module.add_parser(sub)
         p.set_defaults(_run=module.run)

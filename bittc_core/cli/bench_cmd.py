@@ -12,22 +12,36 @@ DEFAULT_CONFIG = "cpu-small-corr"
 
 
 def add_parser(sub) -> argparse.ArgumentParser:
-    p = sub.add_parser("bench", help="CPU latency of the network vs. number of thresholds",
-                       description="Streaming latency (96x288 unless --size) for K = 1, 2, 4, 8, 16, 24 thresholds, "
-                       "binary and continuous, plain and flip-averaged, with the flow baseline timed in the same run. "
-                       "With --backend torch onnxruntime: both backends timed in the same interleaved rounds, "
-                       "side by side with their ratios.")  # fmt: skip
-    p.add_argument("--config", default=None, help=f"model config of random weights (default {DEFAULT_CONFIG}, "
-                   "the shipped one); not with --weights")
+    p = sub.add_parser(
+        "bench",
+        help="CPU latency of the network vs. number of thresholds",
+        description="Streaming latency (96x288 unless --size) for K = 1, 2, 4, 8, 16, 24 thresholds, "
+        "binary and continuous, plain and flip-averaged, with the flow baseline timed in the same run. "
+        "With --backend torch onnxruntime: both backends timed in the same interleaved rounds, "
+        "side by side with their ratios.",
+    )
+    p.add_argument(
+        "--config",
+        default=None,
+        help=f"model config of random weights (default {DEFAULT_CONFIG}, the shipped one); not with --weights",
+    )
     p.add_argument("--weights", default=None, help="time this checkpoint instead of random weights")
-    p.add_argument("--backend", nargs="+", default=["torch"], choices=("torch", "onnxruntime"),
-                   help="backends to time (default torch); onnxruntime times the shipped weights (or --weights) "
-                   "exported to --onnx DIR, or to a temporary folder without it")
+    p.add_argument(
+        "--backend",
+        nargs="+",
+        default=["torch"],
+        choices=("torch", "onnxruntime"),
+        help="backends to time (default torch); onnxruntime times the shipped weights (or --weights) "
+        "exported to --onnx DIR, or to a temporary folder without it",
+    )
     p.add_argument("--onnx", default=None, metavar="DIR", help="with --backend onnxruntime: `bittc export --onnx DIR`")
     p.add_argument("--calls", type=int, default=30, help="timed calls per setting (default 30)")
     p.add_argument("--threads", type=int, default=2, help="torch / onnxruntime threads (default 2)")
-    p.add_argument("--size", default="96x288", help="frame size HxW [px], multiples of 3 (default 96x288, the "
-                   "shipped weights' camera)")
+    p.add_argument(
+        "--size",
+        default="96x288",
+        help="frame size HxW [px], multiples of 3 (default 96x288, the shipped weights' camera)",
+    )
     return p
 
 
@@ -48,7 +62,9 @@ def check_common(args):
         raise CliError("--onnx applies to --backend onnxruntime")
     if "onnxruntime" in backends:
         if args.config is not None:
-            raise CliError("--config: the onnxruntime backend times trained weights (--weights, default the shipped ones)")
+            raise CliError(
+                "--config: the onnxruntime backend times trained weights (--weights, default the shipped ones)"
+            )
         try:
             import onnxruntime  # noqa: F401
         except ImportError:
@@ -96,8 +112,9 @@ def run(args) -> int:
         run_benchmark(settings, weights=args.weights)
         return 0
     with tempfile.TemporaryDirectory(prefix="bittc_bench_") as tmp:
-        ests = estimators_for(backends, args.weights, args.onnx, (settings.height_px, settings.width_px),
-                              settings.threads, tmp)  # fmt: skip
+        ests = estimators_for(
+            backends, args.weights, args.onnx, (settings.height_px, settings.width_px), settings.threads, tmp
+        )
         run_backend_comparison(settings, ests)
     return 0
 

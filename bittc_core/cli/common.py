@@ -9,11 +9,11 @@ from pathlib import Path
 
 from bittc_core.errors import CliError
 
-
 MIN_SIDE_PX = 16  # bounds of an image size (``parse_size``) [px]
 MAX_SIZE_HW_PX = (2048, 4096)
-_SIZE_BOUNDS = (f"height must be in [{MIN_SIDE_PX}, {MAX_SIZE_HW_PX[0]}] and width in "
-                f"[{MIN_SIDE_PX}, {MAX_SIZE_HW_PX[1]}] px")
+_SIZE_BOUNDS = (
+    f"height must be in [{MIN_SIDE_PX}, {MAX_SIZE_HW_PX[0]}] and width in [{MIN_SIDE_PX}, {MAX_SIZE_HW_PX[1]}] px"
+)
 
 
 def _size_in_bounds(h: int, w: int) -> bool:
@@ -40,8 +40,9 @@ def check_frame_size(size_hw: tuple[int, int], method: str, what: str, hint: str
     if not _size_in_bounds(h, w):
         raise CliError(f"{what}: {h}x{w} px; {_SIZE_BOUNDS}{hint}")
     if method == "bittc" and (h % FEATURE_STRIDE or w % FEATURE_STRIDE):
-        raise CliError(f"{what}: {h}x{w} px; the network needs height and width in multiples of "
-                       f"{FEATURE_STRIDE} px{hint}")
+        raise CliError(
+            f"{what}: {h}x{w} px; the network needs height and width in multiples of {FEATURE_STRIDE} px{hint}"
+        )
 
 
 def positive_int(name: str, value: int) -> int:
@@ -52,7 +53,9 @@ def positive_int(name: str, value: int) -> int:
 
 def non_negative_int(name: str, value: int, upper: int | None = None) -> int:
     if value < 0 or (upper is not None and value > upper):
-        raise CliError(f"{name} {value}: must be in [0, {upper}]" if upper is not None else f"{name} {value}: must be >= 0")
+        raise CliError(
+            f"{name} {value}: must be in [0, {upper}]" if upper is not None else f"{name} {value}: must be >= 0"
+        )
     return value
 
 
@@ -75,8 +78,9 @@ DEVICES = ("auto", "cpu", "cuda")
 def add_seed_flag(parser, what: str, default: int | None = 0) -> None:
     """--seed (``check_seed`` bounds it); ``default`` None: required."""
     tail = "" if default is None else f"; default {default}"
-    parser.add_argument("--seed", type=int, default=default, required=default is None,
-                        help=f"{what} (0 to 2^32 - 1{tail})")
+    parser.add_argument(
+        "--seed", type=int, default=default, required=default is None, help=f"{what} (0 to 2^32 - 1{tail})"
+    )
 
 
 def check_seed(value: int, flag: str = "--seed") -> int:
@@ -85,8 +89,12 @@ def check_seed(value: int, flag: str = "--seed") -> int:
 
 
 def add_device_flag(parser) -> None:
-    parser.add_argument("--device", default="auto", choices=DEVICES,
-                        help="where the network runs: auto (cuda when available, default), cpu or cuda")
+    parser.add_argument(
+        "--device",
+        default="auto",
+        choices=DEVICES,
+        help="where the network runs: auto (cuda when available, default), cpu or cuda",
+    )
 
 
 def check_device(value: str) -> str:
@@ -101,8 +109,8 @@ def flag_error(err: Exception, flags: dict[str, str]) -> Exception:
     (``flags[field]``); any other error is returned as it is (``main`` prints it too)."""
     text = str(err)
     for field, flag in flags.items():
-        if text.startswith(field) and text[len(field):len(field) + 1] in ("", " ", ":"):
-            return CliError(flag + text[len(field):])
+        if text.startswith(field) and text[len(field) : len(field) + 1] in ("", " ", ":"):
+            return CliError(flag + text[len(field) :])
     return err
 
 
@@ -127,10 +135,18 @@ TTA_MODES = ("none", "flip")
 
 
 def add_backend_flags(parser) -> None:
-    parser.add_argument("--backend", default="torch", choices=BACKENDS,
-                        help="network backend: torch (default) or onnxruntime (needs --onnx DIR)")
-    parser.add_argument("--onnx", default=None, metavar="DIR",
-                        help="with --backend onnxruntime: a folder made by `bittc export --onnx DIR`")
+    parser.add_argument(
+        "--backend",
+        default="torch",
+        choices=BACKENDS,
+        help="network backend: torch (default) or onnxruntime (needs --onnx DIR)",
+    )
+    parser.add_argument(
+        "--onnx",
+        default=None,
+        metavar="DIR",
+        help="with --backend onnxruntime: a folder made by `bittc export --onnx DIR`",
+    )
 
 
 def backend_kwargs(args, method: str = "bittc") -> dict:

@@ -12,10 +12,13 @@ DEMO_VIDEO_CASE = "CCRs-50"  # where K decides the outcome: the first brake come
 
 
 def add_parser(sub) -> argparse.ArgumentParser:
-    p = sub.add_parser("demo", help="the shipped network at K = 1, 4, 16 and the oracle on the demo suite, as a report",
-                       description="Runs the demo suite (`bittc scenarios --suites`) with the geofence controller "
-                       "(shipped weights) at K = 1, 4 and 16 and the oracle, measured latency, writes a video of "
-                       f"{DEMO_VIDEO_CASE} and an HTML report, and prints where the report is.")  # fmt: skip
+    p = sub.add_parser(
+        "demo",
+        help="the shipped network at K = 1, 4, 16 and the oracle on the demo suite, as a report",
+        description="Runs the demo suite (`bittc scenarios --suites`) with the geofence controller "
+        "(shipped weights) at K = 1, 4 and 16 and the oracle, measured latency, writes a video of "
+        f"{DEMO_VIDEO_CASE} and an HTML report, and prints where the report is.",
+    )
     p.add_argument("--out", default="runs/demo", help="output directory (default runs/demo; must be new or a demo)")
     return p
 
@@ -24,9 +27,15 @@ def run(args) -> int:
     from bittc_core.cli.sweep_cmd import execute
     from sim.sweep.plan import SweepSettings
 
-    settings = SweepSettings(suites=("demo",), controllers=("geofence", "oracle"), num_alphas=DEMO_NUM_ALPHAS,
-                             latencies=("measured",), seeds=1, video_cases=(DEMO_VIDEO_CASE,),
-                             timeline_case=DEMO_VIDEO_CASE)  # fmt: skip
+    settings = SweepSettings(
+        suites=("demo",),
+        controllers=("geofence", "oracle"),
+        num_alphas=DEMO_NUM_ALPHAS,
+        latencies=("measured",),
+        seeds=1,
+        video_cases=(DEMO_VIDEO_CASE,),
+        timeline_case=DEMO_VIDEO_CASE,
+    )
     args.workers, args.backend, args.ray_address, args.resume = 1, "local", None, True
     t0 = time.perf_counter()
     rc = execute(settings, args, "bittc demo " + shlex.join(sys.argv[2:]))

@@ -22,8 +22,16 @@ import time
 from pathlib import Path
 
 from bittc_core.atomic import write_text_atomic
-from bittc_core.cli.common import (TTA_MODES, add_backend_flags, add_device_flag, add_seed_flag, backend_kwargs,
-                                   check_device, check_seed, flag_error)
+from bittc_core.cli.common import (
+    TTA_MODES,
+    add_backend_flags,
+    add_device_flag,
+    add_seed_flag,
+    backend_kwargs,
+    check_device,
+    check_seed,
+    flag_error,
+)
 from bittc_core.errors import CliError, ConfigError
 
 METHODS = ("bittc", "flow", "oracle", "oracle-auc")
@@ -31,27 +39,55 @@ SPLITS = ("train", "val", "test")
 
 
 def add_parser(sub) -> argparse.ArgumentParser:
-    p = sub.add_parser("eval", help="evaluate an estimator on a dataset split",
-                       description=__doc__.split("\n\n", 1)[1])
+    p = sub.add_parser("eval", help="evaluate an estimator on a dataset split", description=__doc__.split("\n\n", 1)[1])
     p.add_argument("--data", default=None, help="dataset folder, or 'synthetic'")
-    p.add_argument("--scenarios", default=None, metavar="SUITE",
-                   help="instead of --data: a suite (ncap, benign, all, demo), a bundled name or a YAML file")
-    p.add_argument("--tau", type=float, nargs="+", default=[0.9, 1.6, 2.4], metavar="S",
-                   help="with --scenarios: the fences' thresholds [s] (default 0.9 1.6 2.4)")
+    p.add_argument(
+        "--scenarios",
+        default=None,
+        metavar="SUITE",
+        help="instead of --data: a suite (ncap, benign, all, demo), a bundled name or a YAML file",
+    )
+    p.add_argument(
+        "--tau",
+        type=float,
+        nargs="+",
+        default=[0.9, 1.6, 2.4],
+        metavar="S",
+        help="with --scenarios: the fences' thresholds [s] (default 0.9 1.6 2.4)",
+    )
     p.add_argument("--plot", default=None, help="with --scenarios: also write this PNG of the inside-share curve")
     add_seed_flag(p, "with --scenarios: scenery seed")
-    p.add_argument("--frame-stride", type=int, default=1, metavar="N",
-                   help="with --scenarios: pair each frame with the one N frames before (default 1)")
-    p.add_argument("--method", required=True, choices=METHODS, help="bittc, flow, oracle, or oracle-auc (exact geofences; "
-                   "continuous output from their AUC at the shipped network's levels: the floor of its AUC)")
+    p.add_argument(
+        "--frame-stride",
+        type=int,
+        default=1,
+        metavar="N",
+        help="with --scenarios: pair each frame with the one N frames before (default 1)",
+    )
+    p.add_argument(
+        "--method",
+        required=True,
+        choices=METHODS,
+        help="bittc, flow, oracle, or oracle-auc (exact geofences; "
+        "continuous output from their AUC at the shipped network's levels: the floor of its AUC)",
+    )
     p.add_argument("--weights", default=None, help="checkpoint for bittc (default: shipped weights)")
-    p.add_argument("--out", default=None, metavar="FILE",
-                   help="JSON file to write, replaced if it exists (default: eval_METHOD_SPLIT.json, or "
-                        "eval_METHOD_scenarios_SUITE.json, in the current folder; refused if that file exists)")
+    p.add_argument(
+        "--out",
+        default=None,
+        metavar="FILE",
+        help="JSON file to write, replaced if it exists (default: eval_METHOD_SPLIT.json, or "
+        "eval_METHOD_scenarios_SUITE.json, in the current folder; refused if that file exists)",
+    )
     p.add_argument("--split", default="test", choices=SPLITS, help="train, val or test (default test)")
     p.add_argument("--limit", type=int, default=None, help="evaluate the first N pairs only")
-    p.add_argument("--tta", default="none", choices=TTA_MODES, help="bittc only: 'flip' averages the network over the plain "
-                   "and the mirrored frames (1.4-2.2x the latency); default 'none'")
+    p.add_argument(
+        "--tta",
+        default="none",
+        choices=TTA_MODES,
+        help="bittc only: 'flip' averages the network over the plain "
+        "and the mirrored frames (1.4-2.2x the latency); default 'none'",
+    )
     add_device_flag(p)
     add_backend_flags(p)
     return p
@@ -76,8 +112,10 @@ def _check(args) -> Path:
     args.backend_kw = {"weights": args.weights} | backend_kwargs(args, args.method)
     if args.scenarios is not None:
         if args.method not in ("bittc", "flow"):
-            raise CliError(f"--method {args.method!r}: --scenarios evaluates bittc or flow (the oracle reads the "
-                           "dataset's ground truth)")
+            raise CliError(
+                f"--method {args.method!r}: --scenarios evaluates bittc or flow (the oracle reads the "
+                "dataset's ground truth)"
+            )
         from controllers.geofence import check_thresholds
 
         try:
@@ -89,8 +127,11 @@ def _check(args) -> Path:
             raise CliError(f"--frame-stride {args.frame_stride}: must be in [1, 10]")
         if args.plot is not None and not args.plot.endswith(".png"):
             raise CliError(f"--plot {args.plot!r}: expected a .png file")
-    default = f"eval_{args.method}_scenarios_{Path(args.scenarios).stem}.json" if args.scenarios else \
-        f"eval_{args.method}_{args.split}.json"
+    default = (
+        f"eval_{args.method}_scenarios_{Path(args.scenarios).stem}.json"
+        if args.scenarios
+        else f"eval_{args.method}_{args.split}.json"
+    )
     out = Path(args.out or default)
     if args.out is None and out.exists():
         raise CliError(f"{default!r} exists (an earlier result); pass --out {default} to replace it, or another --out")
@@ -123,11 +164,22 @@ def evaluate(estimator, dataset, limit: int | None, against=None) -> dict:
         eta_hat = estimator.motion_in_depth(s["image_prev"], s["image_latest"])
         latency = (time.perf_counter() - t0) * 1e3
         if agreement is not None:
-            agreement.add(prob, against.geofence(s["image_prev"], s["image_latest"], acc.thresholds_s), eta_hat,
-                          against.motion_in_depth(s["image_prev"], s["image_latest"]))  # fmt: skip
+            agreement.add(
+                prob,
+                against.geofence(s["image_prev"], s["image_latest"], acc.thresholds_s),
+                eta_hat,
+                against.motion_in_depth(s["image_prev"], s["image_latest"]),
+            )
         speed = s.get("ego_speed_mps")
-        acc.add(prob, eta_hat, s["eta"].numpy(), s["valid"].numpy().astype(bool),
-                s["instance"].numpy(), latency_ms=latency, ego_speed_mps=None if speed is None else float(speed))
+        acc.add(
+            prob,
+            eta_hat,
+            s["eta"].numpy(),
+            s["valid"].numpy().astype(bool),
+            s["instance"].numpy(),
+            latency_ms=latency,
+            ego_speed_mps=None if speed is None else float(speed),
+        )
     result = acc.result()
     result["pairs"] = n
     if agreement is not None:
@@ -139,36 +191,55 @@ def evaluate(estimator, dataset, limit: int | None, against=None) -> dict:
 def format_table(r: dict) -> str:
     from bittc_core.metrics import STATIC_ERROR_TAU_S
 
-    lines = [f"{'metric':<22} {'value':>10}", f"{'mIoU (0.2-2 s)':<22} {r['miou']:>10.4f}",
-             f"{'MiD (x1e4)':<22} {r['mid']:>10.1f}"]
+    lines = [
+        f"{'metric':<22} {'value':>10}",
+        f"{'mIoU (0.2-2 s)':<22} {r['miou']:>10.4f}",
+        f"{'MiD (x1e4)':<22} {r['mid']:>10.1f}",
+    ]
     lines += [f"{'error rate tau=' + k + ' s':<22} {v:>10.4f}" for k, v in r["error_rate"].items()]
     lines += [f"{'actor IoU tau=' + k + ' s':<22} {v:>10.4f}" for k, v in r["actor_iou"].items()]
     lines.append(f"{'latency ms/pair':<22} {r['latency_ms']:>10.2f}")
     if "backend_agreement" in r:
         a = r["backend_agreement"]
-        lines.append(f"against torch: geofence pixels agreeing (min over thresholds) {a['geofence_pixels_agreeing_min']:.6f}, "
-                     f"|log eta| difference max {a['log_eta_abs_diff_max']:.2e}, p99.9 {a['log_eta_abs_diff_p999']:.2e}")
+        lines.append(
+            f"against torch: geofence pixels agreeing (min over thresholds) {a['geofence_pixels_agreeing_min']:.6f}, "
+            f"|log eta| difference max {a['log_eta_abs_diff_max']:.2e}, p99.9 {a['log_eta_abs_diff_p999']:.2e}"
+        )
     b = r.get("breakdown")
     if b:
         lines.append(f"{'MiD actor / static':<22} {b['mid_actor']:>10.1f} / {b['mid_static']:.1f}")
         lines.append("mIoU by threshold [s]: " + ", ".join(f"{t} {v:.3f}" for t, v in b["miou_by_threshold_s"].items()))
         lines.append("mIoU pairs by share of pixels inside the geofence:")
         for label, g in b["by_inside_share"].items():
-            lines.append(f"  {label:>8}: {g['pairs']:>6} pairs, mIoU {g['miou']:.3f}, inside-class IoU "
-                         f"{g['inside_iou']:.3f} over {g['pairs_with_inside_union']} pairs, "
-                         f"false inside px median {g['false_inside_px_median']:.0f}, p90 {g['false_inside_px_p90']:.0f}")
+            lines.append(
+                f"  {label:>8}: {g['pairs']:>6} pairs, mIoU {g['miou']:.3f}, inside-class IoU "
+                f"{g['inside_iou']:.3f} over {g['pairs_with_inside_union']} pairs, "
+                f"false inside px median {g['false_inside_px_median']:.0f}, p90 {g['false_inside_px_p90']:.0f}"
+            )
         if "by_ego_speed_mps" in b:
             key = f"{STATIC_ERROR_TAU_S:g}s"
-            lines.append(f"images by ego speed [m/s]: mIoU, static pixels at tau = {STATIC_ERROR_TAU_S:g} s false inside / missed:")
+            lines.append(
+                "images by ego speed [m/s]: mIoU, static pixels at tau = "
+                f"{STATIC_ERROR_TAU_S:g} s false inside / missed:"
+            )
             for label, g in b["by_ego_speed_mps"].items():
-                lines.append(f"  {label:>8}: {g['images']:>6} images, mIoU {g['miou']:.3f}, "
-                             f"{g['static_false_inside_' + key]:.3f} / {g['static_missed_' + key]:.3f}")
+                lines.append(
+                    f"  {label:>8}: {g['images']:>6} images, mIoU {g['miou']:.3f}, "
+                    f"{g['static_false_inside_' + key]:.3f} / {g['static_missed_' + key]:.3f}"
+                )
         if "errors_by_margin_log_eta" in b:
-            lines.append("errors of the mIoU maps by margin |log eta - log eta_i|: share of errors / error rate / share of pixels:")
+            lines.append(
+                "errors of the mIoU maps by margin |log eta - log eta_i|: "
+                "share of errors / error rate / share of pixels:"
+            )
             for label, g in b["errors_by_margin_log_eta"].items():
-                lines.append(f"  {label:>10}: {g['share_of_errors']:.3f} / {g['error_rate']:.3f} / {g['share_of_pixels']:.3f}")
-            lines.append("mIoU if the errors within a margin were right: " + ", ".join(
-                f"< {m} {v:.3f}" for m, v in b["miou_forgiving_margin_log_eta"].items()))
+                lines.append(
+                    f"  {label:>10}: {g['share_of_errors']:.3f} / {g['error_rate']:.3f} / {g['share_of_pixels']:.3f}"
+                )
+            lines.append(
+                "mIoU if the errors within a margin were right: "
+                + ", ".join(f"< {m} {v:.3f}" for m, v in b["miou_forgiving_margin_log_eta"].items())
+            )
     return "\n".join(lines)
 
 
@@ -184,11 +255,18 @@ def run_scenarios(args, out: Path) -> int:
     estimator = make_estimator(args.method, device=args.device, tta=args.tta, **args.backend_kw)
     from tqdm import tqdm
 
-    results = [scenario_eval.evaluate_case(c, estimator, args.tau, CameraConfig(), args.seed, args.frame_stride)
-               for c in tqdm(cases, desc="cases", unit="case", leave=False)]
-    summary = {"method": args.method, "weights": args.weights, "scenarios": args.scenarios, "seed": args.seed,
-               "frame_stride": args.frame_stride,
-               **scenario_eval.summarize(results, args.tau)}  # fmt: skip
+    results = [
+        scenario_eval.evaluate_case(c, estimator, args.tau, CameraConfig(), args.seed, args.frame_stride)
+        for c in tqdm(cases, desc="cases", unit="case", leave=False)
+    ]
+    summary = {
+        "method": args.method,
+        "weights": args.weights,
+        "scenarios": args.scenarios,
+        "seed": args.seed,
+        "frame_stride": args.frame_stride,
+        **scenario_eval.summarize(results, args.tau),
+    }
     print(scenario_eval.format_table(summary))
     if args.plot:
         tmp = Path(args.plot).with_name(f".{Path(args.plot).name}.tmp.png")
@@ -215,8 +293,15 @@ def run(args) -> int:
     against = None
     if args.backend != "torch":  # the same pairs on torch, for the agreement
         against = make_estimator(args.method, weights=args.weights, device="cpu", tta=args.tta)
-    result = {"method": args.method, "split": args.split, "data": args.data, "weights": args.weights,
-              "tta": args.tta, "backend": args.backend, **evaluate(estimator, dataset, args.limit, against)}
+    result = {
+        "method": args.method,
+        "split": args.split,
+        "data": args.data,
+        "weights": args.weights,
+        "tta": args.tta,
+        "backend": args.backend,
+        **evaluate(estimator, dataset, args.limit, against),
+    }
     print(format_table(result))
     write_text_atomic(out, json.dumps(result, indent=2))
     print(f"wrote {out}")

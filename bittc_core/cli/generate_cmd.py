@@ -10,16 +10,30 @@ from bittc_core.cli.common import add_seed_flag, check_seed, flag_error, parse_s
 from bittc_core.errors import ConfigError
 
 #: the fields of ``GenerationConfig`` and ``generate`` -> their flags
-_FLAGS = {"seed": "--seed", "clip_length": "--clip-length", "fps_hz": "--fps", "ahead_share": "--ahead-share",
-          "supersample": "--supersample", "ground_texture": "--ground-texture", "vehicle_texture": "--vehicle-texture",
-          "split": "--split", "samples": "--samples", "workers": "--workers", "backend": "--backend",
-          "ray_address": "--ray-address", "output folder": "--out"}  # fmt: skip
+_FLAGS = {
+    "seed": "--seed",
+    "clip_length": "--clip-length",
+    "fps_hz": "--fps",
+    "ahead_share": "--ahead-share",
+    "supersample": "--supersample",
+    "ground_texture": "--ground-texture",
+    "vehicle_texture": "--vehicle-texture",
+    "split": "--split",
+    "samples": "--samples",
+    "workers": "--workers",
+    "backend": "--backend",
+    "ray_address": "--ray-address",
+    "output folder": "--out",
+}
 
 
 def add_parser(sub) -> argparse.ArgumentParser:
-    p = sub.add_parser("generate", help="generate synthetic TTC training data",
-                       description="Render randomised scenes with exact ground truth into DIR/SPLIT/. Re-running skips "
-                       "finished samples and regenerates damaged ones; the manifest and dataset card are rebuilt.")  # fmt: skip
+    p = sub.add_parser(
+        "generate",
+        help="generate synthetic TTC training data",
+        description="Render randomised scenes with exact ground truth into DIR/SPLIT/. Re-running skips "
+        "finished samples and regenerates damaged ones; the manifest and dataset card are rebuilt.",
+    )
     p.add_argument("--out", required=True, help="dataset directory")
     p.add_argument("--samples", type=int, required=True, help="samples in this split (indices 0..N-1)")
     add_seed_flag(p, "dataset seed", default=None)
@@ -28,19 +42,32 @@ def add_parser(sub) -> argparse.ArgumentParser:
     p.add_argument("--fps", type=float, default=10.0, help="frame rate [Hz] (default 10)")
     p.add_argument("--clip-length", type=int, default=2, help="frames per sample (default 2: previous and latest)")
     p.add_argument("--supersample", type=int, default=1, help="anti-aliasing factor (1-4, default 1)")
-    p.add_argument("--ground-texture", default="detailed",
-                   help="road and verge textures: detailed (default; patches and broadband noise whose motion "
-                        "can be measured) or smooth (as in datasets made before the option, e.g. bittc_v1)")  # fmt: skip
-    p.add_argument("--vehicle-texture", default="plain",
-                   help="vehicle paint and glass: plain (default, as in bittc_v1 and bittc_v2) or detailed (shading "
-                        "and spots inside the outline whose motion can be measured, as in bittc_v3)")  # fmt: skip
-    p.add_argument("--ahead-share", type=float, default=0.0, metavar="SHARE",
-                   help="this share of the samples has a braking case ahead: a GVT, car, van or truck in or near "
-                        "the ego's lane (overlap 25-100 %% on either side), stationary, slower or braking, at 0.3-4 s TTC, ego "
-                        "10-130 km/h, beside the random scene (default 0: random scenes only, as in bittc_v1-v3)")
+    p.add_argument(
+        "--ground-texture",
+        default="detailed",
+        help="road and verge textures: detailed (default; patches and broadband noise whose motion "
+        "can be measured) or smooth (as in datasets made before the option, e.g. bittc_v1)",
+    )
+    p.add_argument(
+        "--vehicle-texture",
+        default="plain",
+        help="vehicle paint and glass: plain (default, as in bittc_v1 and bittc_v2) or detailed (shading "
+        "and spots inside the outline whose motion can be measured, as in bittc_v3)",
+    )
+    p.add_argument(
+        "--ahead-share",
+        type=float,
+        default=0.0,
+        metavar="SHARE",
+        help="this share of the samples has a braking case ahead: a GVT, car, van or truck in or near "
+        "the ego's lane (overlap 25-100 %% on either side), stationary, slower or braking, at 0.3-4 s TTC, ego "
+        "10-130 km/h, beside the random scene (default 0: random scenes only, as in bittc_v1-v3)",
+    )
     p.add_argument("--workers", type=int, default=1, help="parallel worker processes or Ray tasks (default 1)")
     p.add_argument("--backend", default="local", choices=("local", "ray"), help="local (process pool, default) or ray")
-    p.add_argument("--ray-address", default=None, help="address of an existing Ray cluster (default: start a local one)")
+    p.add_argument(
+        "--ray-address", default=None, help="address of an existing Ray cluster (default: start a local one)"
+    )
     p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
     return p
 
@@ -59,8 +86,24 @@ def run(args) -> int:
 def _generate(args, h: int, w: int) -> dict:
     from bittc_core.data.generate import GenerationConfig, generate
 
-    cfg = GenerationConfig(seed=args.seed, height_px=h, width_px=w, fps_hz=args.fps, clip_length=args.clip_length, supersample=args.supersample,
-                           ground_texture=args.ground_texture, vehicle_texture=args.vehicle_texture,
-                           ahead_share=args.ahead_share)
-    return generate(Path(args.out), cfg, args.split, args.samples, args.workers, args.backend, args.ray_address,
-                    progress=not args.no_progress)  # fmt: skip
+    cfg = GenerationConfig(
+        seed=args.seed,
+        height_px=h,
+        width_px=w,
+        fps_hz=args.fps,
+        clip_length=args.clip_length,
+        supersample=args.supersample,
+        ground_texture=args.ground_texture,
+        vehicle_texture=args.vehicle_texture,
+        ahead_share=args.ahead_share,
+    )
+    return generate(
+        Path(args.out),
+        cfg,
+        args.split,
+        args.samples,
+        args.workers,
+        args.backend,
+        args.ray_address,
+        progress=not args.no_progress,
+    )

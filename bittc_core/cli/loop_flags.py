@@ -10,20 +10,44 @@ from bittc_core.errors import CliError, ConfigError
 def add_controller_flags(p: argparse.ArgumentParser, default: str | None = None) -> None:
     import controllers
 
-    p.add_argument("--controller", required=default is None, default=default,
-                   help=f"{', '.join(controllers.REGISTRY)}, or module:Class for your own Controller subclass"
-                   + (f" (default {default})" if default else ""))
+    p.add_argument(
+        "--controller",
+        required=default is None,
+        default=default,
+        help=f"{', '.join(controllers.REGISTRY)}, or module:Class for your own Controller subclass"
+        + (f" (default {default})" if default else ""),
+    )
     g = p.add_mutually_exclusive_group()
-    g.add_argument("--num-alphas", type=int, default=None, metavar="K",
-                   help="geofence/flow: K thresholds, uniform in log TTC over 0.8-2.8 s (K = 1: 1.5 s; default 4)")
-    g.add_argument("--ttc-thresholds", type=float, nargs="+", default=None, metavar="S",
-                   help="geofence/flow: explicit camera-plane TTC thresholds [s], any order")
-    p.add_argument("--latency", default=None, metavar="MODE",
-                   help="measured, fixed:MS, profile:NAME (`bittc profiles`) or profile:FILE (`bittc profile`); default measured for "
-                        "camera controllers, fixed:0 otherwise")
+    g.add_argument(
+        "--num-alphas",
+        type=int,
+        default=None,
+        metavar="K",
+        help="geofence/flow: K thresholds, uniform in log TTC over 0.8-2.8 s (K = 1: 1.5 s; default 4)",
+    )
+    g.add_argument(
+        "--ttc-thresholds",
+        type=float,
+        nargs="+",
+        default=None,
+        metavar="S",
+        help="geofence/flow: explicit camera-plane TTC thresholds [s], any order",
+    )
+    p.add_argument(
+        "--latency",
+        default=None,
+        metavar="MODE",
+        help="measured, fixed:MS, profile:NAME (`bittc profiles`) or profile:FILE (`bittc profile`); "
+        "default measured for camera controllers, fixed:0 otherwise",
+    )
     p.add_argument("--weights", default=None, help="geofence: network weights (default: the shipped ones)")
-    p.add_argument("--frame-stride", type=int, default=None, metavar="N",
-                   help="geofence/flow: pair each frame with the one N frames before (default 2)")
+    p.add_argument(
+        "--frame-stride",
+        type=int,
+        default=None,
+        metavar="N",
+        help="geofence/flow: pair each frame with the one N frames before (default 2)",
+    )
     from bittc_core.cli.common import add_backend_flags
 
     add_backend_flags(p)
@@ -65,8 +89,10 @@ def controller_from_args(args, camera):
             raise CliError(f"--backend / --onnx apply to the geofence controller, not {name!r}")
         settings.update(backend_kwargs(args))
     if settings and name in controllers.REGISTRY and not takes_fences:
-        raise CliError(f"--num-alphas / --ttc-thresholds / --frame-stride apply to "
-                       f"{' and '.join(controllers.ESTIMATOR_CONTROLLERS)}, not {name!r}")
+        raise CliError(
+            f"--num-alphas / --ttc-thresholds / --frame-stride apply to "
+            f"{' and '.join(controllers.ESTIMATOR_CONTROLLERS)}, not {name!r}"
+        )
     try:
         latency = parse_latency(args.latency) if args.latency is not None else None
     except ConfigError as e:

@@ -29,8 +29,16 @@ from pathlib import Path
 
 import numpy as np
 
-from bittc_core.cli.common import (TTA_MODES, add_backend_flags, add_device_flag, backend_kwargs, check_device,
-                                   check_frame_size, parse_size, writable_dir)
+from bittc_core.cli.common import (
+    TTA_MODES,
+    add_backend_flags,
+    add_device_flag,
+    backend_kwargs,
+    check_device,
+    check_frame_size,
+    parse_size,
+    writable_dir,
+)
 from bittc_core.errors import CliError
 
 METHODS = ("bittc", "flow")  # the oracle needs ground truth, which image files lack
@@ -39,20 +47,40 @@ OUTPUT_FILES = ("prediction.npz", "geofence.png", "ttc.png", "prediction.json")
 
 
 def add_parser(sub) -> argparse.ArgumentParser:
-    p = sub.add_parser("predict", help="geofences and TTC of one pair of image files",
-                       description=__doc__.split("\n\n", 1)[1], formatter_class=argparse.RawDescriptionHelpFormatter)
+    p = sub.add_parser(
+        "predict",
+        help="geofences and TTC of one pair of image files",
+        description=__doc__.split("\n\n", 1)[1],
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     p.add_argument("prev", metavar="PREV", help="the earlier frame (image file)")
     p.add_argument("latest", metavar="LATEST", help="the latest frame (image file), frame_dt_s after PREV")
     p.add_argument("--out", required=True, metavar="DIR", help="output folder")
-    p.add_argument("--tau", type=float, nargs="+", default=list(DEFAULT_TAU_S), metavar="S",
-                   help="geofence thresholds [s] from the latest frame (default 0.5 1 2)")
-    p.add_argument("--method", default="bittc", choices=METHODS, help="bittc (the network, default) or flow (the DIS baseline)")
+    p.add_argument(
+        "--tau",
+        type=float,
+        nargs="+",
+        default=list(DEFAULT_TAU_S),
+        metavar="S",
+        help="geofence thresholds [s] from the latest frame (default 0.5 1 2)",
+    )
+    p.add_argument(
+        "--method", default="bittc", choices=METHODS, help="bittc (the network, default) or flow (the DIS baseline)"
+    )
     p.add_argument("--weights", default=None, help="checkpoint for bittc (default: shipped weights)")
-    p.add_argument("--tta", default="none", choices=TTA_MODES,
-                   help="bittc only: 'flip' averages over the mirrored frames (default none)")
+    p.add_argument(
+        "--tta",
+        default="none",
+        choices=TTA_MODES,
+        help="bittc only: 'flip' averages over the mirrored frames (default none)",
+    )
     add_backend_flags(p)
-    p.add_argument("--size", default=None, metavar="HxW",
-                   help="resize both frames to HxW px first (area interpolation); default: as they are")
+    p.add_argument(
+        "--size",
+        default=None,
+        metavar="HxW",
+        help="resize both frames to HxW px first (area interpolation); default: as they are",
+    )
     add_device_flag(p)
     return p
 
@@ -69,8 +97,9 @@ def read_rgb(path: str, flag: str) -> np.ndarray:
     return cv2.cvtColor(img, cv2.COLOR_BGR2RGB)
 
 
-def geofence_overlay(image_rgb: np.ndarray, geofence: np.ndarray, thresholds_s: np.ndarray,
-                     alpha: float = 0.5) -> np.ndarray:
+def geofence_overlay(
+    image_rgb: np.ndarray, geofence: np.ndarray, thresholds_s: np.ndarray, alpha: float = 0.5
+) -> np.ndarray:
     """Tint each geofence's inside (p > 0.5) from red (shortest tau) to yellow (longest);
     a pixel inside several takes the shortest one's colour (blended once, at ``alpha``)."""
     order = np.argsort(thresholds_s)[::-1]  # longest first, so shorter ones paint over
@@ -106,8 +135,10 @@ def run(args) -> int:
     size = parse_size(args.size) if args.size is not None else None
     prev, latest = read_rgb(args.prev, "PREV"), read_rgb(args.latest, "LATEST")
     if prev.shape != latest.shape:
-        raise CliError(f"PREV is {prev.shape[0]}x{prev.shape[1]} px but LATEST is "
-                       f"{latest.shape[0]}x{latest.shape[1]} px: the frames must be the same size")
+        raise CliError(
+            f"PREV is {prev.shape[0]}x{prev.shape[1]} px but LATEST is "
+            f"{latest.shape[0]}x{latest.shape[1]} px: the frames must be the same size"
+        )
     if size is not None:
         prev, latest = (cv2.resize(img, size[::-1], interpolation=cv2.INTER_AREA) for img in (prev, latest))
     check_frame_size(latest.shape[:2], args.method, "--size" if size is not None else "PREV and LATEST")
@@ -128,21 +159,36 @@ def run(args) -> int:
     quantized = quantize(geofence[order]).astype(np.int16)
 
     summary = {
-        "method": args.method, "weights": args.weights, "tta": args.tta, "backend": args.backend,
+        "method": args.method,
+        "weights": args.weights,
+        "tta": args.tta,
+        "backend": args.backend,
         "device": str(getattr(est, "device", "cpu")),
-        "prev": args.prev, "latest": args.latest, "size_hw": list(latest.shape[:2]),
-        "frame_dt_s": est.dt_s, "thresholds_s": thr.tolist(),
+        "prev": args.prev,
+        "latest": args.latest,
+        "size_hw": list(latest.shape[:2]),
+        "frame_dt_s": est.dt_s,
+        "thresholds_s": thr.tolist(),
         "inside_share": [round(float((g > 0.5).mean()), 6) for g in geofence],
         "wall_ms": {"geofence": round((t1 - t0) * 1e3, 3), "continuous": round((t2 - t1) * 1e3, 3)},
     }
     tmp = Path(tempfile.mkdtemp(prefix=".predict-", dir=out_dir))
     try:
-        save_npz(tmp / "prediction.npz", {"geofence": geofence.astype(np.float32), "thresholds_s": thr,
-                                          "quantized": quantized, "eta": eta.astype(np.float32),
-                                          "ttc_s": ttc})
+        save_npz(
+            tmp / "prediction.npz",
+            {
+                "geofence": geofence.astype(np.float32),
+                "thresholds_s": thr,
+                "quantized": quantized,
+                "eta": eta.astype(np.float32),
+                "ttc_s": ttc,
+            },
+        )
         ones = np.ones(ttc.shape, bool)
-        for name, img in (("geofence.png", geofence_overlay(latest, geofence, thr)),
-                          ("ttc.png", ttc_overlay(latest, ttc, ones, ones.astype(np.int32), 0.5, 0.5))):
+        for name, img in (
+            ("geofence.png", geofence_overlay(latest, geofence, thr)),
+            ("ttc.png", ttc_overlay(latest, ttc, ones, ones.astype(np.int32), 0.5, 0.5)),
+        ):
             ok, png = cv2.imencode(".png", cv2.cvtColor(img, cv2.COLOR_RGB2BGR))
             if not ok:
                 raise CliError(f"could not encode {name}")
@@ -153,8 +199,10 @@ def run(args) -> int:
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
 
-    print(f"{args.method}: {latest.shape[0]}x{latest.shape[1]} px, frame_dt_s {est.dt_s:g} s, "
-          f"geofences {summary['wall_ms']['geofence']:.1f} ms, continuous {summary['wall_ms']['continuous']:.1f} ms")
+    print(
+        f"{args.method}: {latest.shape[0]}x{latest.shape[1]} px, frame_dt_s {est.dt_s:g} s, "
+        f"geofences {summary['wall_ms']['geofence']:.1f} ms, continuous {summary['wall_ms']['continuous']:.1f} ms"
+    )
     for t, share in zip(thr, summary["inside_share"]):
         print(f"  tau <= {t:g} s: {share:.1%} of the pixels inside")
     print(f"wrote {', '.join(str(out_dir / n) for n in OUTPUT_FILES)}")

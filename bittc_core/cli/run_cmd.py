@@ -14,10 +14,13 @@ from sim.camera import CameraConfig
 
 
 def add_parser(sub) -> argparse.ArgumentParser:
-    p = sub.add_parser("run", help="run a scenario closed loop with a braking controller",
-                       description="Run a bundled scenario (name, family or case) or a YAML file with a controller. "
-                       "One case writes DIR/summary.json, trace.csv, config.yaml (and camera.mp4); a sweep writes one "
-                       "such folder per case plus DIR/summary.csv.")  # fmt: skip
+    p = sub.add_parser(
+        "run",
+        help="run a scenario closed loop with a braking controller",
+        description="Run a bundled scenario (name, family or case) or a YAML file with a controller. "
+        "One case writes DIR/summary.json, trace.csv, config.yaml (and camera.mp4); a sweep writes one "
+        "such folder per case plus DIR/summary.csv.",
+    )
     p.add_argument("scenario", help="bundled name (see `bittc scenarios`) or path to a YAML file")
     add_controller_flags(p)
     p.add_argument("--out", required=True, help="output directory")
@@ -33,13 +36,21 @@ def add_camera_flags(p: argparse.ArgumentParser) -> None:
     p.add_argument("--vfov", type=float, default=None, help="vertical field of view [deg] (default 30)")
     p.add_argument("--pitch", type=float, default=None, help="camera pitch, positive looks down [deg] (default 2)")
     p.add_argument("--camera-height", type=float, default=None, help="camera height above ground [m] (default 1.3)")
-    p.add_argument("--jitter-deg", type=float, default=None, help="std of per-frame pitch/yaw/roll jitter [deg] (default 0)")
+    p.add_argument(
+        "--jitter-deg", type=float, default=None, help="std of per-frame pitch/yaw/roll jitter [deg] (default 0)"
+    )
     p.add_argument("--supersample", type=int, default=None, help="anti-aliasing factor 1-4 (default 1)")
-    p.add_argument("--ground-texture", default="detailed",
-                   help="road and verges: detailed (default) or smooth (as in dataset bittc_v1)")
-    p.add_argument("--vehicle-texture", default="plain",
-                   help="vehicle paint and glass: plain (default, as in datasets bittc_v1 and bittc_v2) or detailed "
-                        "(as in bittc_v3)")
+    p.add_argument(
+        "--ground-texture",
+        default="detailed",
+        help="road and verges: detailed (default) or smooth (as in dataset bittc_v1)",
+    )
+    p.add_argument(
+        "--vehicle-texture",
+        default="plain",
+        help="vehicle paint and glass: plain (default, as in datasets bittc_v1 and bittc_v2) or detailed "
+        "(as in bittc_v3)",
+    )
 
 
 def textures_from_args(args):
@@ -48,8 +59,13 @@ def textures_from_args(args):
 
 def camera_from_args(args) -> CameraConfig:
     kw = {}
-    for flag, field in (("vfov", "vfov_deg"), ("pitch", "pitch_deg"), ("camera_height", "mount_height_m"),
-                        ("jitter_deg", "jitter_deg"), ("supersample", "supersample")):  # fmt: skip
+    for flag, field in (
+        ("vfov", "vfov_deg"),
+        ("pitch", "pitch_deg"),
+        ("camera_height", "mount_height_m"),
+        ("jitter_deg", "jitter_deg"),
+        ("supersample", "supersample"),
+    ):
         if getattr(args, flag) is not None:
             kw[field] = getattr(args, flag)
     if args.size is not None:
@@ -78,8 +94,9 @@ def run(args) -> int:
         s = run_case(cases[0], controller, camera, args.seed, out, video=args.video, textures=textures, latency=latency)
         print(json.dumps(s, indent=2))
     else:
-        summaries = run_cases(cases, controller, camera, args.seed, out, video=args.video, textures=textures,
-                              latency=latency)  # fmt: skip
+        summaries = run_cases(
+            cases, controller, camera, args.seed, out, video=args.video, textures=textures, latency=latency
+        )
         print(format_table(summaries))
     print(f"wrote {Path(out)}")
     return 0

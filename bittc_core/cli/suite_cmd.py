@@ -11,9 +11,12 @@ from bittc_core.cli.run_cmd import add_camera_flags, camera_from_args, textures_
 
 
 def add_parser(sub) -> argparse.ArgumentParser:
-    p = sub.add_parser("suite", help="run the bundled scenario suite and print a summary table",
-                       description="Runs every case of the bundled scenarios (or --scenarios A,B,...) and writes "
-                       "DIR/summary.csv, DIR/summary.json and one folder per case.")  # fmt: skip
+    p = sub.add_parser(
+        "suite",
+        help="run the bundled scenario suite and print a summary table",
+        description="Runs every case of the bundled scenarios (or --scenarios A,B,...) and writes "
+        "DIR/summary.csv, DIR/summary.json and one folder per case.",
+    )
     add_controller_flags(p, default="oracle")
     p.add_argument("--out", required=True, help="output directory")
     p.add_argument("--scenarios", default=None, help="comma-separated names/families (default: all bundled)")
@@ -36,8 +39,9 @@ def run(args) -> int:
         cases = list(scenarios.bundled().cases.values())
     controller, latency = controller_from_args(args, camera)
     out = writable_dir(args.out)
-    summaries = run_cases(cases, controller, camera, args.seed, out, video=args.video, textures=textures,
-                          latency=latency)
+    summaries = run_cases(
+        cases, controller, camera, args.seed, out, video=args.video, textures=textures, latency=latency
+    )
     print(format_table(summaries, markdown=args.markdown))
     print(f"wrote {out}/summary.csv")
     return 0

@@ -22,52 +22,98 @@ STAGE_CHOICES = ("flow", "binary", "continuous", "all")
 
 
 def add_parser(sub) -> argparse.ArgumentParser:
-    p = sub.add_parser("train", help="train the Binary-TTC network",
-                       description=__doc__.split("\n\n", 1)[1])
+    p = sub.add_parser("train", help="train the Binary-TTC network", description=__doc__.split("\n\n", 1)[1])
     p.add_argument("--data", required=True, help="dataset folder, or 'synthetic' for the built-in generator")
-    p.add_argument("--config", required=True, help="model config name (paper, cpu-small, cpu-small-gc, cpu-medium, cpu-small-corr, cpu-small-corr-gc, tiny)")
+    p.add_argument(
+        "--config",
+        required=True,
+        help="model config name (paper, cpu-small, cpu-small-gc, cpu-medium, cpu-small-corr, cpu-small-corr-gc, tiny)",
+    )
     p.add_argument("--out", required=True, help="best checkpoint path, *.pt")
     p.add_argument("--resume", action="store_true", help="continue from <stem>.last.pt")
-    p.add_argument("--init", default=None, help="start from the weights of this checkpoint (same config, or a config "
-                   "this one grows from, such as cpu-small for cpu-medium or cpu-small-corr: the added blocks start as the "
-                   "identity)")
+    p.add_argument(
+        "--init",
+        default=None,
+        help="start from the weights of this checkpoint (same config, or a config "
+        "this one grows from, such as cpu-small for cpu-medium or cpu-small-corr: the added blocks start as the "
+        "identity)",
+    )
     add_seed_flag(p, "seed of the initial weights, the data order and the augmentation")
     p.add_argument("--steps", type=int, default=2000, help="optimiser steps per stage (default 2000)")
     p.add_argument("--batch-size", type=int, default=8, help="image pairs per optimiser step (default 8)")
     p.add_argument("--lr", type=float, default=3e-4, help="peak learning rate (default 3e-4)")
-    p.add_argument("--warmup-steps", type=int, default=200,
-                   help="linear warm-up steps before the cosine decay, per stage (default 200)")
+    p.add_argument(
+        "--warmup-steps",
+        type=int,
+        default=200,
+        help="linear warm-up steps before the cosine decay, per stage (default 200)",
+    )
     p.add_argument("--val-every", type=int, default=250, help="steps between validations")
     p.add_argument("--val-limit", type=int, default=64, help="validation pairs")
-    p.add_argument("--keep-checkpoints", action="store_true",
-                   help="also keep the weights of every validation step, <stem>.<stage>.step<NNNNNN>.pt beside --out "
-                        "(for weight averaging: docs/average_weights.py)")
+    p.add_argument(
+        "--keep-checkpoints",
+        action="store_true",
+        help="also keep the weights of every validation step, <stem>.<stage>.step<NNNNNN>.pt beside --out "
+        "(for weight averaging: bittc weights average)",
+    )
     add_device_flag(p)
-    p.add_argument("--stage", default="binary", choices=STAGE_CHOICES, help="flow, binary, continuous or all (default binary)")
-    p.add_argument("--actor-weight", type=float, default=1.0,
-                   help="binary stage: loss weight of vehicle (actor) pixels, moving or not; "
-                        "scenery pixels 1 (default 1)")
-    p.add_argument("--inpath-weight", type=float, default=1.0,
-                   help="binary stage: loss weight of in-path vehicle pixels (within 1.5 m of the camera's axis, "
-                        "nearer than 80 m), instead of --actor-weight there (default 1)")
-    p.add_argument("--lovasz-weight", type=float, default=0.0,
-                   help="binary stage: add this weight x a Lovasz surrogate of the per-map two-class IoU "
-                        "to the BCE (default 0)")
-    p.add_argument("--pixel-thresholds", type=float, default=0.0, metavar="SHARE",
-                   help="binary stage: this share of the eta thresholds at the eta of a random valid pixel of "
-                        "each pair (jittered), the rest uniform (default 0)")
-    p.add_argument("--teacher", default=None,
-                   help="binary stage: also learn the flip-averaged maps of this frozen checkpoint (same config; "
-                        "self-distillation, soft BCE targets beside the ground truth; each step also runs the teacher "
-                        "on both views of its pairs)")
-    p.add_argument("--distill-weight", type=float, default=None,
-                   help="with --teacher: weight of the distillation BCE beside the ground-truth BCE (default 1)")
-    p.add_argument("--lr-mult", action="append", default=[], metavar="PREFIX=M",
-                   help="parameters whose names start with PREFIX learn at M x the learning rate, and decay "
-                        "at M x the weight decay (repeatable; e.g. segnet.corr_=10 for the correlation convs "
-                        "that --init added at zero; --resume needs the same flags)")
-    p.add_argument("--freeze-binary", action="store_true",
-                   help="continuous stage: train the continuous refinement only, the binary network frozen")
+    p.add_argument(
+        "--stage", default="binary", choices=STAGE_CHOICES, help="flow, binary, continuous or all (default binary)"
+    )
+    p.add_argument(
+        "--actor-weight",
+        type=float,
+        default=1.0,
+        help="binary stage: loss weight of vehicle (actor) pixels, moving or not; scenery pixels 1 (default 1)",
+    )
+    p.add_argument(
+        "--inpath-weight",
+        type=float,
+        default=1.0,
+        help="binary stage: loss weight of in-path vehicle pixels (within 1.5 m of the camera's axis, "
+        "nearer than 80 m), instead of --actor-weight there (default 1)",
+    )
+    p.add_argument(
+        "--lovasz-weight",
+        type=float,
+        default=0.0,
+        help="binary stage: add this weight x a Lovasz surrogate of the per-map two-class IoU to the BCE (default 0)",
+    )
+    p.add_argument(
+        "--pixel-thresholds",
+        type=float,
+        default=0.0,
+        metavar="SHARE",
+        help="binary stage: this share of the eta thresholds at the eta of a random valid pixel of "
+        "each pair (jittered), the rest uniform (default 0)",
+    )
+    p.add_argument(
+        "--teacher",
+        default=None,
+        help="binary stage: also learn the flip-averaged maps of this frozen checkpoint (same config; "
+        "self-distillation, soft BCE targets beside the ground truth; each step also runs the teacher "
+        "on both views of its pairs)",
+    )
+    p.add_argument(
+        "--distill-weight",
+        type=float,
+        default=None,
+        help="with --teacher: weight of the distillation BCE beside the ground-truth BCE (default 1)",
+    )
+    p.add_argument(
+        "--lr-mult",
+        action="append",
+        default=[],
+        metavar="PREFIX=M",
+        help="parameters whose names start with PREFIX learn at M x the learning rate, and decay "
+        "at M x the weight decay (repeatable; e.g. segnet.corr_=10 for the correlation convs "
+        "that --init added at zero; --resume needs the same flags)",
+    )
+    p.add_argument(
+        "--freeze-binary",
+        action="store_true",
+        help="continuous stage: train the continuous refinement only, the binary network frozen",
+    )
     return p
 
 
@@ -79,8 +125,12 @@ def _check(args) -> None:
     if args.stage not in STAGE_CHOICES:
         raise CliError(f"--stage {args.stage!r}: expected one of {STAGE_CHOICES}")
     check_device(args.device)
-    for flag, value in (("--steps", args.steps), ("--batch-size", args.batch_size),
-                        ("--val-every", args.val_every), ("--val-limit", args.val_limit)):
+    for flag, value in (
+        ("--steps", args.steps),
+        ("--batch-size", args.batch_size),
+        ("--val-every", args.val_every),
+        ("--val-limit", args.val_limit),
+    ):
         if value <= 0:
             raise CliError(f"{flag} {value}: must be > 0")
     check_seed(args.seed)
@@ -138,8 +188,10 @@ def _check_same_lr_mults(name: str, meta: dict, lr_mults: tuple[tuple[str, float
     """A resumed run keeps its learning-rate multipliers (its optimizer's groups)."""
     old = tuple((str(p), float(m)) for p, m in meta.get("train_config", {}).get("lr_mults", ()))
     if sorted(old) != sorted(lr_mults):  # the groups do not depend on the flags' order
+
         def show(mults):
             return " ".join(f"--lr-mult {p}={m:g}" for p, m in mults) or "no --lr-mult"
+
         raise CliError(f"--resume: {name} was trained with {show(old)}, not {show(lr_mults)}")
 
 
@@ -147,11 +199,16 @@ def _check_same_teacher(name: str, meta: dict, teacher: str | None, distill_weig
     """A resumed run keeps the teacher and distillation weight it was started with."""
     old_teacher = meta.get("teacher")
     old_weight = float(meta.get("train_config", {}).get("distill_weight", 0.0))
-    same = (old_teacher is None) == (teacher is None) and old_weight == distill_weight and (
-        teacher is None or Path(old_teacher).resolve() == Path(teacher).resolve())
+    same = (
+        (old_teacher is None) == (teacher is None)
+        and old_weight == distill_weight
+        and (teacher is None or Path(old_teacher).resolve() == Path(teacher).resolve())
+    )
     if not same:
-        raise CliError(f"--resume: {name} was trained with --teacher {old_teacher!r} (distill weight {old_weight:g}), "
-                       f"not --teacher {teacher!r} (distill weight {distill_weight:g})")
+        raise CliError(
+            f"--resume: {name} was trained with --teacher {old_teacher!r} (distill weight {old_weight:g}), "
+            f"not --teacher {teacher!r} (distill weight {distill_weight:g})"
+        )
 
 
 def write_yaml_atomic(path: Path, data: dict) -> None:
@@ -168,7 +225,7 @@ def run(args) -> int:
     from bittc_core.model import BinaryTTCNet, get_config
     from bittc_core.train import STAGES, RunPaths, TrainConfig, Trainer
     from bittc_core.train.data import open_split
-    from bittc_core.train.loop import frozen_prefixes, param_groups
+    from bittc_core.train.params import frozen_prefixes, param_groups
 
     paths = RunPaths.from_out(args.out)
     try:
@@ -178,8 +235,9 @@ def run(args) -> int:
     if args.resume and not paths.last.is_file():
         raise CliError(f"--resume: no resumable checkpoint at {str(paths.last)!r}")
     if not args.resume and (paths.last.exists() or paths.csv.exists()):
-        raise CliError(f"--out {args.out!r}: a run already exists there ({paths.last.name}); "
-                       "pass --resume or choose another --out")
+        raise CliError(
+            f"--out {args.out!r}: a run already exists there ({paths.last.name}); pass --resume or choose another --out"
+        )
     if args.teacher and Path(args.teacher).resolve() in (paths.best.resolve(), paths.last.resolve()):
         raise CliError(f"--teacher {args.teacher!r}: is this run's own checkpoint (--out {args.out!r} writes it)")
     try:
@@ -203,8 +261,10 @@ def run(args) -> int:
     for name, ds in (("train", train_set), ("val", val_set)):
         dt = float(ds[0]["dt_s"])
         if abs(dt - net.config.frame_dt_s) > 1e-6:
-            raise CliError(f"--data {args.data!r}: the {name} split has frame interval dt_s = {dt:g} s, but config "
-                           f"{args.config!r} is trained at frame_dt_s = {net.config.frame_dt_s:g} s")
+            raise CliError(
+                f"--data {args.data!r}: the {name} split has frame interval dt_s = {dt:g} s, but config "
+                f"{args.config!r} is trained at frame_dt_s = {net.config.frame_dt_s:g} s"
+            )
     stages = list(STAGES) if args.stage == "all" else [args.stage]
     resume_stage = None
     if args.resume:
@@ -215,30 +275,47 @@ def run(args) -> int:
         _check_same_lr_mults(paths.last.name, meta_last, lr_mults)
         if resume_stage not in stages:
             raise CliError(f"--resume: {paths.last.name} is at stage {resume_stage!r}, not in {stages}")
-        stages = stages[stages.index(resume_stage):]
+        stages = stages[stages.index(resume_stage) :]
 
-    base = TrainConfig(steps=args.steps, batch_size=args.batch_size, lr=args.lr, warmup_steps=args.warmup_steps,
-                       val_every=args.val_every, val_limit=args.val_limit, seed=args.seed,
-                       actor_weight=args.actor_weight, inpath_weight=args.inpath_weight,
-                       lovasz_weight=args.lovasz_weight,
-                       distill_weight=distill_weight, pixel_threshold_share=args.pixel_thresholds,
-                       lr_mults=lr_mults, keep_checkpoints=args.keep_checkpoints)
-    stage_cfgs = {stage: dataclasses.replace(base, stage=stage,
-                                             freeze_binary=args.freeze_binary and stage == "continuous")
-                  for stage in stages}
+    base = TrainConfig(
+        steps=args.steps,
+        batch_size=args.batch_size,
+        lr=args.lr,
+        warmup_steps=args.warmup_steps,
+        val_every=args.val_every,
+        val_limit=args.val_limit,
+        seed=args.seed,
+        actor_weight=args.actor_weight,
+        inpath_weight=args.inpath_weight,
+        lovasz_weight=args.lovasz_weight,
+        distill_weight=distill_weight,
+        pixel_threshold_share=args.pixel_thresholds,
+        lr_mults=lr_mults,
+        keep_checkpoints=args.keep_checkpoints,
+    )
+    stage_cfgs = {
+        stage: dataclasses.replace(base, stage=stage, freeze_binary=args.freeze_binary and stage == "continuous")
+        for stage in stages
+    }
     for stage, cfg in stage_cfgs.items():  # before anything is written or trained
         try:
             param_groups(net, lr_mults, frozen_prefixes(cfg))
         except ValueError as err:
             frozen = " --freeze-binary" if cfg.freeze_binary else ""
             raise CliError(f"--lr-mult: {err} (config {args.config!r}, --stage {stage}{frozen})") from None
-    write_yaml_atomic(paths.config, {
-        "argv": list(sys.argv),
-        "data": args.data, "device": str(device), "stages": stages,
-        "model_config_name": args.config, "teacher": args.teacher,
-        "model_config": dataclasses.asdict(net.config),
-        "train_config": {stage: dataclasses.asdict(cfg) for stage, cfg in stage_cfgs.items()},  # as each stage runs
-    })
+    write_yaml_atomic(
+        paths.config,
+        {
+            "argv": list(sys.argv),
+            "data": args.data,
+            "device": str(device),
+            "stages": stages,
+            "model_config_name": args.config,
+            "teacher": args.teacher,
+            "model_config": dataclasses.asdict(net.config),
+            "train_config": {stage: dataclasses.asdict(cfg) for stage, cfg in stage_cfgs.items()},  # as each stage runs
+        },
+    )
     meta = {"data": args.data, "seed": args.seed, **({"teacher": args.teacher} if args.teacher else {})}
     for stage, cfg in stage_cfgs.items():
         trainer = Trainer(net, args.config, cfg, train_set, val_set, device, paths, meta, teacher=teacher)

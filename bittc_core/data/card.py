@@ -25,9 +25,17 @@ def scan(out: Path) -> list[dict]:
                 meta = json.loads((sd / "meta.json").read_text())
             except (OSError, ValueError):
                 continue
-            rows.append({"split": split, "index": int(sd.name), "seed": meta["seed"], "path": f"{split}/{sd.name}",
-                         "n_frames": meta["n_frames"], "n_actors": len(meta["actors"]),
-                         "_hist": meta["tau_histogram_actor_px"]})  # fmt: skip
+            rows.append(
+                {
+                    "split": split,
+                    "index": int(sd.name),
+                    "seed": meta["seed"],
+                    "path": f"{split}/{sd.name}",
+                    "n_frames": meta["n_frames"],
+                    "n_actors": len(meta["actors"]),
+                    "_hist": meta["tau_histogram_actor_px"],
+                }
+            )
     return rows
 
 
@@ -35,8 +43,16 @@ def summarize(rows: list[dict]) -> dict:
     splits: dict[str, dict] = {}
     total_hist: dict[str, int] = dict.fromkeys(tau_bin_labels(), 0)
     for r in rows:
-        s = splits.setdefault(r["split"], {"samples": 0, "seed_min": r["seed"], "seed_max": r["seed"], "actors": 0,
-                                           "tau_histogram_actor_px": dict.fromkeys(tau_bin_labels(), 0)})  # fmt: skip
+        s = splits.setdefault(
+            r["split"],
+            {
+                "samples": 0,
+                "seed_min": r["seed"],
+                "seed_max": r["seed"],
+                "actors": 0,
+                "tau_histogram_actor_px": dict.fromkeys(tau_bin_labels(), 0),
+            },
+        )
         s["samples"] += 1
         s["seed_min"], s["seed_max"] = min(s["seed_min"], r["seed"]), max(s["seed_max"], r["seed"])
         s["actors"] += r["n_actors"]
@@ -45,15 +61,26 @@ def summarize(rows: list[dict]) -> dict:
             total_hist[k] += v
     n = sum(total_hist.values())
     if n == 0:
-        return {"splits": splits, "tau_histogram_actor_px": total_hist, "tau_share_actor_px": None, "largest_bin_share": None}
+        return {
+            "splits": splits,
+            "tau_histogram_actor_px": total_hist,
+            "tau_share_actor_px": None,
+            "largest_bin_share": None,
+        }
     share = {k: round(v / n, 4) for k, v in total_hist.items()}
-    return {"splits": splits, "tau_histogram_actor_px": total_hist, "tau_share_actor_px": share,
-            "largest_bin_share": max(share.values())}  # fmt: skip
+    return {
+        "splits": splits,
+        "tau_histogram_actor_px": total_hist,
+        "tau_share_actor_px": share,
+        "largest_bin_share": max(share.values()),
+    }
 
 
 def rebuild_manifest_and_card(out: Path, cfg, run: dict | None = None) -> dict:
     rows = scan(out)
-    write_text_atomic(out / MANIFEST, "".join(json.dumps({k: v for k, v in r.items() if not k.startswith("_")}) + "\n" for r in rows))
+    write_text_atomic(
+        out / MANIFEST, "".join(json.dumps({k: v for k, v in r.items() if not k.startswith("_")}) + "\n" for r in rows)
+    )
     card_path = out / CARD
     runs = []
     if card_path.exists():
@@ -70,7 +97,7 @@ def rebuild_manifest_and_card(out: Path, cfg, run: dict | None = None) -> dict:
         **summarize(rows),
         "generation_runs": runs,
         "notes": "tau from the latest frame's capture time; histogram over actor pixels (instance > 0) of the "
-                 "latest pair; timings in generation_runs vary between machines and runs.",
-    }  # fmt: skip
+        "latest pair; timings in generation_runs vary between machines and runs.",
+    }
     write_text_atomic(card_path, json.dumps(card, indent=2) + "\n")
     return card

@@ -30,16 +30,23 @@ import numpy as np
 import torch
 from torch.utils.data import Dataset
 
-INPATH_HALF_WIDTH_M = 1.5  # [m] |X| of the camera frame: the ego's half width plus a margin
-INPATH_MAX_DEPTH_M = 80.0  # [m]
-
 from bittc_core.data.format import SPLITS, read_sample
 from bittc_core.errors import ConfigError
 
+INPATH_HALF_WIDTH_M = 1.5  # [m] |X| of the camera frame: the ego's half width plus a margin
+INPATH_MAX_DEPTH_M = 80.0  # [m]
+
 
 class TTCDataset(Dataset):
-    def __init__(self, root: str | Path, split: str, augment: bool = False, seed: int = 0,
-                 crop_hw: tuple[int, int] | None = None, pair: int | str = -1):  # fmt: skip
+    def __init__(
+        self,
+        root: str | Path,
+        split: str,
+        augment: bool = False,
+        seed: int = 0,
+        crop_hw: tuple[int, int] | None = None,
+        pair: int | str = -1,
+    ):
         self.root = Path(root)
         if split not in SPLITS:
             raise ConfigError(f"split {split!r}: must be one of {', '.join(SPLITS)}")
@@ -84,18 +91,24 @@ class TTCDataset(Dataset):
             x0 = int(round(K[2] - (cw - 1) / 2))
             y0, x0 = min(max(y0, 0), H - ch), min(max(x0, 0), W - cw)
             sl = (slice(y0, y0 + ch), slice(x0, x0 + cw))
-            prev, latest, eta, tau, flow, valid, inst, depth = (a[sl] for a in (prev, latest, eta, tau, flow, valid, inst, depth))
+            prev, latest, eta, tau, flow, valid, inst, depth = (
+                a[sl] for a in (prev, latest, eta, tau, flow, valid, inst, depth)
+            )
             K = K - np.array([0, 0, x0, y0], np.float32)
             H, W = ch, cw
         if self.augment:
             if rng.random() < 0.5:
-                prev, latest, eta, tau, flow, valid, inst, depth = (a[:, ::-1] for a in (prev, latest, eta, tau, flow, valid, inst, depth))
+                prev, latest, eta, tau, flow, valid, inst, depth = (
+                    a[:, ::-1] for a in (prev, latest, eta, tau, flow, valid, inst, depth)
+                )
                 flow = flow * np.array([-1.0, 1.0], np.float32)
                 K = K.copy()
                 K[2] = W - 1 - K[2]
             gain = rng.uniform(0.9, 1.1, 3).astype(np.float32)
             bright, contrast, gamma = rng.uniform(-0.1, 0.1), rng.uniform(0.8, 1.2), rng.uniform(0.8, 1.25)
-            prev, latest = (np.clip(((x**gamma) * gain - 0.5) * contrast + 0.5 + bright, 0.0, 1.0) for x in (prev, latest))
+            prev, latest = (
+                np.clip(((x**gamma) * gain - 0.5) * contrast + 0.5 + bright, 0.0, 1.0) for x in (prev, latest)
+            )
         lateral_m = np.abs(np.arange(W, dtype=np.float32) - K[2])[None, :] / K[0] * depth
         inpath = (inst > 0) & valid & (lateral_m < INPATH_HALF_WIDTH_M) & (depth < INPATH_MAX_DEPTH_M)
         return {

@@ -37,7 +37,14 @@ from bittc_core.data.npz_writer import save_npz
 
 FORMAT_VERSION = 1
 SPLITS = ("train", "val", "test")
-GT_KEYS = {"eta": np.float32, "tau_s": np.float32, "depth_m": np.float32, "flow_px": np.float32, "instance": np.int16, "valid": np.bool_}
+GT_KEYS = {
+    "eta": np.float32,
+    "tau_s": np.float32,
+    "depth_m": np.float32,
+    "flow_px": np.float32,
+    "instance": np.int16,
+    "valid": np.bool_,
+}
 # tau histogram bin edges [s] over actor pixels; plus "below", "above" and "inf" (receding at eta == 1)
 TAU_BIN_EDGES_S = (-10.0, -5.0, -3.0, -2.0, -1.0, -0.5, 0.0, 0.5, 1.0, 2.0, 3.0, 5.0, 10.0)
 
@@ -58,7 +65,12 @@ def tau_histogram(tau_s: np.ndarray, mask: np.ndarray) -> dict[str, int]:
     finite = t[~inf]
     counts, _ = np.histogram(finite, bins=np.asarray(TAU_BIN_EDGES_S))
     edges = TAU_BIN_EDGES_S
-    values = [int((finite < edges[0]).sum()), *(int(c) for c in counts), int((finite >= edges[-1]).sum()), int(inf.sum())]
+    values = [
+        int((finite < edges[0]).sum()),
+        *(int(c) for c in counts),
+        int((finite >= edges[-1]).sum()),
+        int(inf.sum()),
+    ]
     return dict(zip(tau_bin_labels(), values))
 
 
@@ -77,8 +89,13 @@ def write_sample(split_dir: Path, index: int, clip, extra_meta: dict) -> None:
     arrays = {key: np.stack([getattr(g, key) for g in clip.gts]).astype(dt) for key, dt in GT_KEYS.items()}
     save_npz(tmp / "gt.npz", arrays)
     last = clip.gts[-1]
-    meta = {**clip.meta, **extra_meta, "format_version": FORMAT_VERSION, "n_frames": len(clip.images),
-            "tau_histogram_actor_px": tau_histogram(last.tau_s, last.valid & (last.instance > 0))}  # fmt: skip
+    meta = {
+        **clip.meta,
+        **extra_meta,
+        "format_version": FORMAT_VERSION,
+        "n_frames": len(clip.images),
+        "tau_histogram_actor_px": tau_histogram(last.tau_s, last.valid & (last.instance > 0)),
+    }
     (tmp / "meta.json").write_text(json.dumps(meta, indent=1, sort_keys=True) + "\n")
     if final.exists():  # a damaged sample being regenerated
         shutil.rmtree(final)

@@ -47,11 +47,29 @@ def save_npz(path: str | Path, arrays: dict[str, np.ndarray]) -> None:
         fname = f"{name}.npy".encode()
         crc = zlib.crc32(raw)
         offset = len(out)
-        out += _LOCAL.pack(0x04034B50, _VERSION, 0, _METHOD_DEFLATE, _DOS_TIME, _DOS_DATE,
-                           crc, len(packed), len(raw), len(fname), 0)
+        out += _LOCAL.pack(
+            0x04034B50, _VERSION, 0, _METHOD_DEFLATE, _DOS_TIME, _DOS_DATE, crc, len(packed), len(raw), len(fname), 0
+        )
         out += fname + packed
-        central += _CENTRAL.pack(0x02014B50, _MADE_BY, _VERSION, 0, _METHOD_DEFLATE, _DOS_TIME, _DOS_DATE,
-                                 crc, len(packed), len(raw), len(fname), 0, 0, 0, 0, _MODE, offset)
+        central += _CENTRAL.pack(
+            0x02014B50,
+            _MADE_BY,
+            _VERSION,
+            0,
+            _METHOD_DEFLATE,
+            _DOS_TIME,
+            _DOS_DATE,
+            crc,
+            len(packed),
+            len(raw),
+            len(fname),
+            0,
+            0,
+            0,
+            0,
+            _MODE,
+            offset,
+        )
         central += fname
     n = len(arrays)
     end = _END.pack(0x06054B50, 0, 0, n, n, len(central), len(out), 0)

@@ -80,14 +80,20 @@ class _Layer:
         return (np.abs(a) <= 1.0) & (np.abs(b) <= 1.0)
 
     def sample(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
-        return cv2.remap(self.texture, (x + MARGIN_PX).astype(np.float32),
-                         (y + MARGIN_PX).astype(np.float32), cv2.INTER_LINEAR,
-                         borderMode=cv2.BORDER_REFLECT_101)
+        return cv2.remap(
+            self.texture,
+            (x + MARGIN_PX).astype(np.float32),
+            (y + MARGIN_PX).astype(np.float32),
+            cv2.INTER_LINEAR,
+            borderMode=cv2.BORDER_REFLECT_101,
+        )
 
     def to_prev(self, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """x_prev = c + (x_latest - t - c) / s."""
-        return (self.centre[0] + (x - self.shift[0] - self.centre[0]) / self.scale,
-                self.centre[1] + (y - self.shift[1] - self.centre[1]) / self.scale)
+        return (
+            self.centre[0] + (x - self.shift[0] - self.centre[0]) / self.scale,
+            self.centre[1] + (y - self.shift[1] - self.centre[1]) / self.scale,
+        )
 
 
 class SyntheticPairs(Dataset):
@@ -108,22 +114,33 @@ class SyntheticPairs(Dataset):
         h, w = c.height_px, c.width_px
         canvas = (h + 2 * MARGIN_PX, w + 2 * MARGIN_PX)
         t = lambda: rng.uniform(-c.max_translation_px, c.max_translation_px, 2)  # noqa: E731
-        layers = [_Layer(
-            texture=smooth_texture(rng, *canvas),
-            centre=np.array([rng.uniform(0.3, 0.7) * w, rng.uniform(0.3, 0.7) * h]),
-            scale=1.0 / rng.uniform(*c.background_eta), shift=0.3 * t(), shape="plane",
-            pos=np.zeros(2), half=np.ones(2), angle=0.0,
-        )]
+        layers = [
+            _Layer(
+                texture=smooth_texture(rng, *canvas),
+                centre=np.array([rng.uniform(0.3, 0.7) * w, rng.uniform(0.3, 0.7) * h]),
+                scale=1.0 / rng.uniform(*c.background_eta),
+                shift=0.3 * t(),
+                shape="plane",
+                pos=np.zeros(2),
+                half=np.ones(2),
+                angle=0.0,
+            )
+        ]
         for _ in range(rng.integers(c.patches[0], c.patches[1] + 1)):
             pos = np.array([rng.uniform(0, w), rng.uniform(0, h)])
             half = rng.uniform(*c.patch_half_size_px, 2)
-            layers.append(_Layer(
-                texture=smooth_texture(rng, *canvas),
-                centre=pos + rng.uniform(-0.5, 0.5, 2) * half,
-                scale=1.0 / rng.uniform(*c.patch_eta), shift=t(),
-                shape=str(rng.choice(["ellipse", "rect"])), pos=pos, half=half,
-                angle=float(rng.uniform(0, np.pi)),
-            ))
+            layers.append(
+                _Layer(
+                    texture=smooth_texture(rng, *canvas),
+                    centre=pos + rng.uniform(-0.5, 0.5, 2) * half,
+                    scale=1.0 / rng.uniform(*c.patch_eta),
+                    shift=t(),
+                    shape=str(rng.choice(["ellipse", "rect"])),
+                    pos=pos,
+                    half=half,
+                    angle=float(rng.uniform(0, np.pi)),
+                )
+            )
         return layers
 
     def __getitem__(self, index: int) -> dict[str, torch.Tensor]:
@@ -160,6 +177,5 @@ class SyntheticPairs(Dataset):
             "valid": torch.ones((h, w), dtype=torch.bool),
             "instance": torch.from_numpy(instance),
             "dt_s": torch.tensor(c.dt_s, dtype=torch.float32),
-            "intrinsics": torch.tensor([c.focal_px, c.focal_px, (w - 1) / 2, (h - 1) / 2],
-                                       dtype=torch.float32),
+            "intrinsics": torch.tensor([c.focal_px, c.focal_px, (w - 1) / 2, (h - 1) / 2], dtype=torch.float32),
         }

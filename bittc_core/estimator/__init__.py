@@ -19,8 +19,14 @@ METHODS = ("bittc", "flow", "oracle", "oracle-auc")
 BACKENDS = ("torch", "onnxruntime")
 
 
-def make_estimator(method: str, weights: str | None = None, device: str = "auto",
-                   tta: str = "none", backend: str = "torch", onnx: str | None = None) -> Estimator:
+def make_estimator(
+    method: str,
+    weights: str | None = None,
+    device: str = "auto",
+    tta: str = "none",
+    backend: str = "torch",
+    onnx: str | None = None,
+) -> Estimator:
     if method not in METHODS:
         raise EstimatorInputError(f"unknown method {method!r}; expected one of {METHODS}")
     if backend not in BACKENDS:
@@ -29,7 +35,9 @@ def make_estimator(method: str, weights: str | None = None, device: str = "auto"
         if method != "bittc":
             raise EstimatorInputError(f"backend 'onnxruntime' runs the network (method 'bittc'), not {method!r}")
         if onnx is None:
-            raise EstimatorInputError("backend 'onnxruntime' needs onnx=DIR, an export folder (`bittc export` makes one)")
+            raise EstimatorInputError(
+                "backend 'onnxruntime' needs onnx=DIR, an export folder (`bittc export` makes one)"
+            )
         if device not in ("auto", "cpu"):
             raise EstimatorInputError(f"device {device!r}: the onnxruntime backend runs on the CPU")
         from bittc_core.estimator.onnx import OnnxBittcEstimator
@@ -51,5 +59,16 @@ def make_estimator(method: str, weights: str | None = None, device: str = "auto"
     return OracleEstimator()
 
 
-__all__ = ["Estimator", "EstimatorInputError", "quantize", "BittcEstimator", "FlowEstimator",
-           "FlowBaselineConfig", "OracleEstimator", "make_estimator", "METHODS", "BACKENDS", "TTA_MODES"]
+__all__ = [
+    "Estimator",
+    "EstimatorInputError",
+    "quantize",
+    "BittcEstimator",
+    "FlowEstimator",
+    "FlowBaselineConfig",
+    "OracleEstimator",
+    "make_estimator",
+    "METHODS",
+    "BACKENDS",
+    "TTA_MODES",
+]

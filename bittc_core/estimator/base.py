@@ -19,7 +19,6 @@ import torch
 from bittc_core.errors import ConfigError
 from bittc_core.ttc import eta_to_tau, tau_to_eta
 
-
 RANGE_RTOL = 1e-6  # thresholds computed in float round-trips may graze the range ends
 
 
@@ -42,8 +41,7 @@ def as_image_tensor(image, name: str) -> torch.Tensor:
         if image.ndim == 3:
             image = image[None]
         if image.ndim != 4 or image.shape[0] != 1 or image.shape[1] != 3:
-            raise EstimatorInputError(f"{name}: expected a (3, H, W) or (1, 3, H, W) tensor, "
-                                      f"got shape {shape}")
+            raise EstimatorInputError(f"{name}: expected a (3, H, W) or (1, 3, H, W) tensor, got shape {shape}")
         image = image.detach().to("cpu", torch.float32)
         if not torch.isfinite(image).all():
             raise EstimatorInputError(f"{name}: contains NaN or inf")
@@ -51,16 +49,16 @@ def as_image_tensor(image, name: str) -> torch.Tensor:
         if lo < 0.0 or hi > 1.0:
             raise EstimatorInputError(f"{name}: values must lie in [0, 1], got [{lo:.3g}, {hi:.3g}]")
         return image
-    raise EstimatorInputError(f"{name}: expected a numpy uint8 array or a float tensor, "
-                              f"got {type(image).__name__}")
+    raise EstimatorInputError(f"{name}: expected a numpy uint8 array or a float tensor, got {type(image).__name__}")
 
 
 def as_image_pair(image_prev, image_latest) -> tuple[torch.Tensor, torch.Tensor]:
     prev = as_image_tensor(image_prev, "image_prev")
     latest = as_image_tensor(image_latest, "image_latest")
     if prev.shape != latest.shape:
-        raise EstimatorInputError(f"frames differ in size: image_prev {tuple(prev.shape[-2:])} "
-                                  f"vs image_latest {tuple(latest.shape[-2:])}")
+        raise EstimatorInputError(
+            f"frames differ in size: image_prev {tuple(prev.shape[-2:])} vs image_latest {tuple(latest.shape[-2:])}"
+        )
     return prev, latest
 
 
@@ -86,8 +84,9 @@ def as_thresholds(thresholds_s, tau_range_s: tuple[float, float], *, sorted_: bo
         bad = np.nonzero(np.diff(thr) <= 0)[0]
         if bad.size:
             i = int(bad[0])
-            raise EstimatorInputError(f"thresholds_s must increase strictly: {thr[i]:g} s is "
-                                      f"followed by {thr[i + 1]:g} s")
+            raise EstimatorInputError(
+                f"thresholds_s must increase strictly: {thr[i]:g} s is followed by {thr[i + 1]:g} s"
+            )
     return thr
 
 

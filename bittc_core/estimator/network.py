@@ -30,8 +30,9 @@ class BittcEstimator(StreamingNetEstimator):
         self.net = net.to(self.device).eval()
 
     @classmethod
-    def from_checkpoint(cls, path: str | os.PathLike | None = None,
-                        device: str = "auto", tta: str = "none") -> "BittcEstimator":
+    def from_checkpoint(
+        cls, path: str | os.PathLike | None = None, device: str = "auto", tta: str = "none"
+    ) -> BittcEstimator:
         """Load ``path`` (default: the shipped ``bittc_core/weights/bittc_default.pt``)."""
         check_tta(tta)
         dev = pick_device(device)

@@ -39,8 +39,14 @@ class OnnxBittcEstimator(StreamingNetEstimator):
     name = "bittc"
     backend = "onnxruntime"
 
-    def __init__(self, folder: str | os.PathLike, *, weights: str | os.PathLike | None = None, tta: str = "none",
-                 threads: int | None = None) -> None:  # fmt: skip
+    def __init__(
+        self,
+        folder: str | os.PathLike,
+        *,
+        weights: str | os.PathLike | None = None,
+        tta: str = "none",
+        threads: int | None = None,
+    ) -> None:
         ort = require_onnxruntime()
         folder = Path(folder)
         manifest = read_manifest(folder, graphs=GRAPHS)
@@ -48,8 +54,9 @@ class OnnxBittcEstimator(StreamingNetEstimator):
             from bittc_core.checkpoint import load_checkpoint
 
             check_matches_checkpoint(manifest, folder, load_checkpoint(weights, map_location="cpu"), weights)
-        super().__init__(dt_s=manifest["frame_dt_s"], tau_range_s=tuple(manifest["tau_range_s"]),
-                         device=torch.device("cpu"), tta=tta)  # fmt: skip
+        super().__init__(
+            dt_s=manifest["frame_dt_s"], tau_range_s=tuple(manifest["tau_range_s"]), device=torch.device("cpu"), tta=tta
+        )
         self.manifest = manifest
         self.folder = folder
         self.size_px = (manifest["image"]["height_px"], manifest["image"]["width_px"])
@@ -66,16 +73,19 @@ class OnnxBittcEstimator(StreamingNetEstimator):
             try:
                 self.sessions[name] = ort.InferenceSession(str(path), opts, providers=["CPUExecutionProvider"])
             except Exception as e:  # onnxruntime raises its own Fail / InvalidGraph types
-                raise ExportError(f"{str(path)!r}: onnxruntime cannot load it ({type(e).__name__}: "
-                                  f"{str(e).splitlines()[0][:200]})") from None  # fmt: skip
+                raise ExportError(
+                    f"{str(path)!r}: onnxruntime cannot load it ({type(e).__name__}: {str(e).splitlines()[0][:200]})"
+                ) from None
         self._ref_names = [o.name for o in self.sessions["reference"].get_outputs()]
 
     def _check_size(self, image: torch.Tensor) -> None:
         super()._check_size(image)
         if tuple(image.shape[-2:]) != self.size_px:
-            raise EstimatorInputError(f"image size {tuple(image.shape[-2:])} px: the ONNX export in "
-                                      f"{str(self.folder)!r} takes {self.size_px} px; export it at this size "
-                                      "(`bittc export` takes a size)")  # fmt: skip
+            raise EstimatorInputError(
+                f"image size {tuple(image.shape[-2:])} px: the ONNX export in "
+                f"{str(self.folder)!r} takes {self.size_px} px; export it at this size "
+                "(`bittc export` takes a size)"
+            )
 
     def _run(self, graph: str, feeds: dict) -> list[np.ndarray]:
         return self.sessions[graph].run(None, feeds)
@@ -91,8 +101,10 @@ class OnnxBittcEstimator(StreamingNetEstimator):
     def _classify(self, ctx: dict, feat_prev: np.ndarray, eta: torch.Tensor) -> torch.Tensor:
         feeds = {n: ctx[n] for n in self._ref_names} | {"features_prev": feat_prev}
         eta = np.ascontiguousarray(eta.numpy(), dtype=np.float32)
-        parts = [self._run("thresholds", feeds | {"eta": eta[:, i:i + HYPOTHESES_PER_RUN]})[0]
-                 for i in range(0, eta.shape[1], HYPOTHESES_PER_RUN)]  # fmt: skip
+        parts = [
+            self._run("thresholds", feeds | {"eta": eta[:, i : i + HYPOTHESES_PER_RUN]})[0]
+            for i in range(0, eta.shape[1], HYPOTHESES_PER_RUN)
+        ]
         return torch.from_numpy(np.concatenate(parts, axis=1) if len(parts) > 1 else parts[0])
 
     def _log_eta(self, ctx: dict, feat_prev: np.ndarray) -> torch.Tensor:

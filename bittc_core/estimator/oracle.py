@@ -29,8 +29,10 @@ class OracleEstimator(Estimator):
         if auc_volume is not None:
             lo, hi, levels = auc_volume
             if not (0 < lo < hi and int(levels) == levels >= 2):
-                raise EstimatorInputError(f"oracle auc_volume={auc_volume}: expected (eta_lo, eta_hi, levels) "
-                                          "with 0 < eta_lo < eta_hi and levels >= 2")
+                raise EstimatorInputError(
+                    f"oracle auc_volume={auc_volume}: expected (eta_lo, eta_hi, levels) "
+                    "with 0 < eta_lo < eta_hi and levels >= 2"
+                )
             self.name = "oracle-auc"
 
     def set_ground_truth(self, eta) -> None:
@@ -46,8 +48,9 @@ class OracleEstimator(Estimator):
         if self._eta is None:
             raise EstimatorInputError("oracle: call set_ground_truth(eta) before asking for maps")
         if self._eta.shape != tuple(latest.shape[-2:]):
-            raise EstimatorInputError(f"oracle: ground truth {self._eta.shape} does not match the "
-                                      f"images {tuple(latest.shape[-2:])}")
+            raise EstimatorInputError(
+                f"oracle: ground truth {self._eta.shape} does not match the images {tuple(latest.shape[-2:])}"
+            )
         return self._eta
 
     def _geofence(self, prev: torch.Tensor, latest: torch.Tensor, eta: np.ndarray) -> np.ndarray:

@@ -46,8 +46,9 @@ def check_tta(tta: str) -> None:
 class StreamingNetEstimator(Estimator):
     """The network behind the estimator interface, with the streaming cache."""
 
-    def __init__(self, *, dt_s: float, tau_range_s: tuple[float, float], device: torch.device,
-                 tta: str = "none") -> None:  # fmt: skip
+    def __init__(
+        self, *, dt_s: float, tau_range_s: tuple[float, float], device: torch.device, tta: str = "none"
+    ) -> None:
         check_tta(tta)
         super().__init__(dt_s=dt_s, tau_range_s=tau_range_s)
         self.device = device
@@ -67,7 +68,7 @@ class StreamingNetEstimator(Estimator):
         self._features.clear()
         self._reference = None
 
-    def fork(self, tta: str | None = None) -> "StreamingNetEstimator":
+    def fork(self, tta: str | None = None) -> StreamingNetEstimator:
         """Another estimator on the same model (network or sessions, not copied) with its
         own empty cache, and ``tta`` if given."""
         other = copy.copy(self)
@@ -92,8 +93,9 @@ class StreamingNetEstimator(Estimator):
 
     def _check_size(self, image: torch.Tensor) -> None:
         if image.shape[-1] % 3 or image.shape[-2] % 3:
-            raise EstimatorInputError(f"image size {tuple(image.shape[-2:])} px: height and width "
-                                      "must be multiples of 3")  # fmt: skip
+            raise EstimatorInputError(
+                f"image size {tuple(image.shape[-2:])} px: height and width must be multiples of 3"
+            )
 
     # -- cache --------------------------------------------------------------------------
     def _views(self, image: torch.Tensor) -> torch.Tensor:

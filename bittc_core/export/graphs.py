@@ -41,15 +41,18 @@ GRAPHS = ("extractor", "reference", "thresholds", "continuous")
 
 def padded_grid(net: BinaryTTCNet, height_px: int, width_px: int) -> PaddedGrid:
     c = net.config
-    return PaddedGrid.for_features(height_px // FEATURE_STRIDE, width_px // FEATURE_STRIDE, c.pad_factor,
-                                   c.down_factor)  # fmt: skip
+    return PaddedGrid.for_features(height_px // FEATURE_STRIDE, width_px // FEATURE_STRIDE, c.pad_factor, c.down_factor)
 
 
 def reference_names(net: BinaryTTCNet) -> tuple[str, ...]:
     """The reference terms this config has, in the graphs' order."""
     c = net.config
-    return ("ref_first",) + (("ref_skip",) if c.full_res_skip else ()) + (("ref_feat",) if c.corr_groups else ()) + (
-        "guide",)  # fmt: skip
+    return (
+        ("ref_first",)
+        + (("ref_skip",) if c.full_res_skip else ())
+        + (("ref_feat",) if c.corr_groups else ())
+        + ("guide",)
+    )
 
 
 class _Graph(nn.Module):
@@ -73,7 +76,7 @@ class _Graph(nn.Module):
         corr = None
         if cfg.corr_groups:
             corr = scale_correlation(terms.feat, feat_prev, eta, warped, grid, cfg.corr_groups, cfg.corr_log_step)
-        coarse = net.segnet(terms, warped, grid, corr)[:, HEAD_TTC:HEAD_TTC + 1]
+        coarse = net.segnet(terms, warped, grid, corr)[:, HEAD_TTC : HEAD_TTC + 1]
         coarse = F.interpolate(coarse, size=self.size, mode="bilinear", align_corners=False)
         return net.refine(guide, coarse).view(v, k, *self.size)
 
@@ -86,8 +89,12 @@ class ExtractorGraph(_Graph):
 class ReferenceGraph(_Graph):
     def forward(self, features: torch.Tensor, image: torch.Tensor) -> tuple[torch.Tensor, ...]:
         terms = self.net.segnet.prepare(self.grid.pad(features), self.grid)
-        out = {"ref_first": terms.first, "ref_skip": terms.skip, "ref_feat": terms.feat,
-               "guide": self.net.refine.guide(image)}  # fmt: skip
+        out = {
+            "ref_first": terms.first,
+            "ref_skip": terms.skip,
+            "ref_feat": terms.feat,
+            "guide": self.net.refine.guide(image),
+        }
         return tuple(out[n] for n in self.ref_names)
 
 

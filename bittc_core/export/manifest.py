@@ -33,8 +33,20 @@ from bittc_core.errors import ConfigError
 
 FORMAT = "bittc-onnx/1"
 MANIFEST = "manifest.json"
-KEYS = ("format", "config_name", "model_config", "weights", "image", "frame_dt_s", "tau_range_s", "eta_range",
-        "continuous", "opset", "graphs", "exporter")  # fmt: skip
+KEYS = (
+    "format",
+    "config_name",
+    "model_config",
+    "weights",
+    "image",
+    "frame_dt_s",
+    "tau_range_s",
+    "eta_range",
+    "continuous",
+    "opset",
+    "graphs",
+    "exporter",
+)
 
 
 class ExportError(ConfigError):
@@ -62,7 +74,9 @@ def read_manifest(folder: str | Path, *, graphs: tuple[str, ...], verify_hashes:
     except (ValueError, UnicodeDecodeError) as e:
         raise ExportError(f"{str(path)!r}: not valid JSON ({e})") from None
     if not isinstance(m, dict) or m.get("format") != FORMAT:
-        raise ExportError(f"{str(path)!r}: not a {FORMAT} manifest (format {m.get('format') if isinstance(m, dict) else None!r})")
+        raise ExportError(
+            f"{str(path)!r}: not a {FORMAT} manifest (format {m.get('format') if isinstance(m, dict) else None!r})"
+        )
     missing = [k for k in KEYS if k not in m]
     if missing:
         raise ExportError(f"{str(path)!r}: lacks the keys {missing}")
@@ -83,11 +97,16 @@ def check_matches_checkpoint(manifest: dict, folder: str | Path, ckpt: dict, wei
     from dataclasses import asdict
 
     if manifest["config_name"] != ckpt["config_name"] or manifest["model_config"] != json.loads(
-            json.dumps(asdict(ckpt["model_config"]))):  # fmt: skip
-        raise ExportError(f"ONNX export {str(folder)!r} is of config {manifest['config_name']!r}, not of the "
-                          f"checkpoint {str(weights_path)!r} ({ckpt['config_name']!r}); export it again")
+        json.dumps(asdict(ckpt["model_config"]))
+    ):
+        raise ExportError(
+            f"ONNX export {str(folder)!r} is of config {manifest['config_name']!r}, not of the "
+            f"checkpoint {str(weights_path)!r} ({ckpt['config_name']!r}); export it again"
+        )
     digest = sha256_file(weights_path)
     if manifest["weights"]["sha256"] != digest:
-        raise ExportError(f"ONNX export {str(folder)!r} was made from other weights (sha256 "
-                          f"{manifest['weights']['sha256'][:12]}...) than {str(weights_path)!r} ({digest[:12]}...); "
-                          "export it again")
+        raise ExportError(
+            f"ONNX export {str(folder)!r} was made from other weights (sha256 "
+            f"{manifest['weights']['sha256'][:12]}...) than {str(weights_path)!r} ({digest[:12]}...); "
+            "export it again"
+        )

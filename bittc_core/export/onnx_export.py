@@ -61,12 +61,21 @@ def _specs(net, height_px: int, width_px: int):
     return {
         "extractor": (ext, (image,), ["image"], ["features"], on_views(1)),
         "reference": (ref_graph, (feats, image), ["features_latest", "image_latest"], list(names), on_views(2)),
-        "thresholds": (G.ThresholdsGraph(net, height_px, width_px), (*refs, feats, eta),
-                       [*names, "features_prev", "eta"], ["logits"],
-                       (*on_views(len(names) + 1), {0: views, 1: thr})),
-        "continuous": (G.ContinuousGraph(net, height_px, width_px), (*refs, image, feats),
-                       [*names, "image_latest", "features_prev"], ["log_eta"], on_views(len(names) + 2)),
-    }  # fmt: skip
+        "thresholds": (
+            G.ThresholdsGraph(net, height_px, width_px),
+            (*refs, feats, eta),
+            [*names, "features_prev", "eta"],
+            ["logits"],
+            (*on_views(len(names) + 1), {0: views, 1: thr}),
+        ),
+        "continuous": (
+            G.ContinuousGraph(net, height_px, width_px),
+            (*refs, image, feats),
+            [*names, "image_latest", "features_prev"],
+            ["log_eta"],
+            on_views(len(names) + 2),
+        ),
+    }
 
 
 def _io(values, names, dynamic) -> list[dict]:
@@ -77,8 +86,9 @@ def _io(values, names, dynamic) -> list[dict]:
     return out
 
 
-def export_onnx(weights: str | Path, out: str | Path, *, height_px: int | None = None,
-                width_px: int | None = None) -> dict:  # fmt: skip
+def export_onnx(
+    weights: str | Path, out: str | Path, *, height_px: int | None = None, width_px: int | None = None
+) -> dict:
     """Export ``weights`` into the folder ``out``; -> the manifest."""
     require_onnx()
     import onnx
@@ -109,31 +119,60 @@ def export_onnx(weights: str | Path, out: str | Path, *, height_px: int | None =
                 warnings.simplefilter("ignore")
                 # a forward(*args) is one parameter to torch.export: its specs go as one tuple
                 shapes = (dynamic,) if name in VARARGS_GRAPHS else dynamic
-                torch.onnx.export(module, args, str(path), input_names=in_names, output_names=out_names,
-                                  dynamic_shapes=shapes, opset_version=OPSET, dynamo=True, external_data=False,
-                                  verbose=False)  # fmt: skip
+                torch.onnx.export(
+                    module,
+                    args,
+                    str(path),
+                    input_names=in_names,
+                    output_names=out_names,
+                    dynamic_shapes=shapes,
+                    opset_version=OPSET,
+                    dynamo=True,
+                    external_data=False,
+                    verbose=False,
+                )
                 outputs = module(*args)
             onnx.checker.check_model(str(path), full_check=True)
             outputs = outputs if isinstance(outputs, tuple) else (outputs,)
             out_dynamic = [{0: "views", 1: "thresholds"} if name == "thresholds" else {0: "views"}] * len(outputs)
-            entries[name] = {"file": path.name, "sha256": sha256_file(path), "inputs": _io(args, in_names, dynamic),
-                             "outputs": _io(outputs, out_names, out_dynamic)}
+            entries[name] = {
+                "file": path.name,
+                "sha256": sha256_file(path),
+                "inputs": _io(args, in_names, dynamic),
+                "outputs": _io(outputs, out_names, out_dynamic),
+            }
         manifest = {
             "format": FORMAT,
             "config_name": ckpt["config_name"],
             "model_config": json.loads(json.dumps(asdict(cfg))),
-            "weights": {"file": Path(weights).name, "sha256": sha256_file(weights), "release": release_name(ckpt, weights)},
-            "image": {"height_px": h, "width_px": w, "layout": "NCHW", "channels": "RGB", "range": [0.0, 1.0],
-                      "normalisation": "(x - 0.5) / 0.5, inside the graphs"},
+            "weights": {
+                "file": Path(weights).name,
+                "sha256": sha256_file(weights),
+                "release": release_name(ckpt, weights),
+            },
+            "image": {
+                "height_px": h,
+                "width_px": w,
+                "layout": "NCHW",
+                "channels": "RGB",
+                "range": [0.0, 1.0],
+                "normalisation": "(x - 0.5) / 0.5, inside the graphs",
+            },
             "frame_dt_s": cfg.frame_dt_s,
             "tau_range_s": [cfg.tau_min_s, cfg.tau_max_s],
-            "eta_range": [cfg.tau_min_s / (cfg.tau_min_s + cfg.frame_dt_s), cfg.tau_max_s / (cfg.tau_max_s + cfg.frame_dt_s)],
+            "eta_range": [
+                cfg.tau_min_s / (cfg.tau_min_s + cfg.frame_dt_s),
+                cfg.tau_max_s / (cfg.tau_max_s + cfg.frame_dt_s),
+            ],
             "continuous": {"eta_min": cfg.cont_eta_min, "eta_max": cfg.cont_eta_max, "levels": cfg.cont_levels},
             "opset": OPSET,
             "graphs": entries,
-            "exporter": {"torch": torch.__version__, "onnx": onnx.__version__,
-                         "created": datetime.date.today().isoformat()},
-        }  # fmt: skip
+            "exporter": {
+                "torch": torch.__version__,
+                "onnx": onnx.__version__,
+                "created": datetime.date.today().isoformat(),
+            },
+        }
         (tmp / MANIFEST).write_text(json.dumps(manifest, indent=2) + "\n")
         _swap_in(tmp, out)
         return manifest

@@ -17,8 +17,7 @@ from __future__ import annotations
 import torch
 
 
-def uniform_levels(eta_lo: float, eta_hi: float, levels: int, *,
-                   device: torch.device | None = None) -> torch.Tensor:
+def uniform_levels(eta_lo: float, eta_hi: float, levels: int, *, device: torch.device | None = None) -> torch.Tensor:
     """(K,) bin centres eta_i = eta_lo + (i + 1/2) d."""
     step = (eta_hi - eta_lo) / levels
     return eta_lo + step * (torch.arange(levels, device=device, dtype=torch.float32) + 0.5)

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 NORMS = ("none", "batch", "group")
 #: Growth fields: raising one adds modules that start as the identity (``GrowthBlock``,
@@ -92,8 +92,9 @@ class ModelConfig:
             if getattr(self, name) < 0:
                 raise ValueError(f"ModelConfig.{name}={getattr(self, name)}: must be >= 0")
         if self.corr_groups and self.feat_channels % self.corr_groups:
-            raise ValueError(f"ModelConfig.corr_groups={self.corr_groups}: must divide "
-                             f"feat_channels={self.feat_channels}")
+            raise ValueError(
+                f"ModelConfig.corr_groups={self.corr_groups}: must divide feat_channels={self.feat_channels}"
+            )
         if not 0.0 < self.corr_log_step < math.inf:
             raise ValueError(f"ModelConfig.corr_log_step={self.corr_log_step}: must be > 0")
         if self.pad_factor < 1.0:
@@ -105,7 +106,7 @@ class ModelConfig:
         return 2 ** len(self.enc_channels)
 
     @classmethod
-    def from_dict(cls, values: dict) -> "ModelConfig":
+    def from_dict(cls, values: dict) -> ModelConfig:
         """Rebuild from ``asdict(config)``; unknown keys are an error, lists -> tuples."""
         names = {f.name: f for f in dataclasses.fields(cls)}
         unknown = sorted(set(values) - set(names))

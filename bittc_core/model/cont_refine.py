@@ -34,8 +34,7 @@ class DilatedResBlock(nn.Module):
 
 
 class ContRefineNet(nn.Module):
-    def __init__(self, *, channels: int, dilations: tuple[int, ...], norm: str,
-                 levels: int = 0) -> None:
+    def __init__(self, *, channels: int, dilations: tuple[int, ...], norm: str, levels: int = 0) -> None:
         super().__init__()
         self.levels = levels
         self.stem = ConvNormAct(4 + levels, channels, norm=norm)
@@ -44,8 +43,9 @@ class ContRefineNet(nn.Module):
         nn.init.zeros_(self.out.weight)
         nn.init.zeros_(self.out.bias)
 
-    def forward(self, log_eta: torch.Tensor, image_ref: torch.Tensor,
-                prob_le: torch.Tensor | None = None) -> torch.Tensor:
+    def forward(
+        self, log_eta: torch.Tensor, image_ref: torch.Tensor, prob_le: torch.Tensor | None = None
+    ) -> torch.Tensor:
         """-> refined log eta (B, 1, H, W)."""
         parts = [log_eta, (image_ref - IMAGE_MEAN) / IMAGE_STD]
         if self.levels:

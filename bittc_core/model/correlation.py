@@ -37,9 +37,15 @@ def group_correlation(ref: torch.Tensor, warped: torch.Tensor, groups: int) -> t
     return prod.mean(dim=3).view(b * k, groups, h, w)
 
 
-def scale_correlation(ref: torch.Tensor, src: torch.Tensor, eta: torch.Tensor,
-                      warped: torch.Tensor, grid: PaddedGrid, groups: int,
-                      log_step: float) -> torch.Tensor:
+def scale_correlation(
+    ref: torch.Tensor,
+    src: torch.Tensor,
+    eta: torch.Tensor,
+    warped: torch.Tensor,
+    grid: PaddedGrid,
+    groups: int,
+    log_step: float,
+) -> torch.Tensor:
     """Correlation volume of the three warps about each eta (B, K) -> (B*K, 3G, hp, wp).
 
     ``ref`` (B, C, h, w) are the unpadded reference features, ``warped`` is

@@ -39,9 +39,17 @@ class ResBlock(nn.Module):
 
 
 class FeatExtractNet(nn.Module):
-    def __init__(self, *, stem_channels: int, out_channels: int, res_blocks: int,
-                 pool_sizes: tuple[int, ...], spp_channels: int, norm: str,
-                 extra_blocks: int = 0) -> None:
+    def __init__(
+        self,
+        *,
+        stem_channels: int,
+        out_channels: int,
+        res_blocks: int,
+        pool_sizes: tuple[int, ...],
+        spp_channels: int,
+        norm: str,
+        extra_blocks: int = 0,
+    ) -> None:
         super().__init__()
         self.stem = nn.Sequential(
             # no padding: feature pixel i sees input pixels 3i..3i+2 exactly (centre 3i+1)

@@ -10,7 +10,7 @@ LEAKY_SLOPE = 0.1  # LeakyReLU slope used throughout (paper, Supp. A)
 
 
 def make_norm(norm: str, channels: int) -> nn.Module:
-    """"none" -> identity, "batch" -> BatchNorm2d, "group" -> GroupNorm (<= 8 groups)."""
+    """ "none" -> identity, "batch" -> BatchNorm2d, "group" -> GroupNorm (<= 8 groups)."""
     if norm == "none":
         return nn.Identity()
     if norm == "batch":
@@ -20,8 +20,15 @@ def make_norm(norm: str, channels: int) -> nn.Module:
     raise ValueError(f"unknown norm {norm!r}")
 
 
-def conv(in_ch: int, out_ch: int, kernel: int = 3, stride: int = 1, dilation: int = 1,
-         bias: bool = True, padding: int | None = None) -> nn.Conv2d:
+def conv(
+    in_ch: int,
+    out_ch: int,
+    kernel: int = 3,
+    stride: int = 1,
+    dilation: int = 1,
+    bias: bool = True,
+    padding: int | None = None,
+) -> nn.Conv2d:
     """A convolution, 'same'-padded (odd kernels) unless ``padding`` is given."""
     pad = dilation * (kernel // 2) if padding is None else padding
     return nn.Conv2d(in_ch, out_ch, kernel, stride=stride, padding=pad, dilation=dilation, bias=bias)
@@ -30,8 +37,18 @@ def conv(in_ch: int, out_ch: int, kernel: int = 3, stride: int = 1, dilation: in
 class ConvNormAct(nn.Sequential):
     """conv -> norm -> LeakyReLU(0.1); the conv has a bias only when there is no norm."""
 
-    def __init__(self, in_ch: int, out_ch: int, *, kernel: int = 3, stride: int = 1,
-                 dilation: int = 1, norm: str = "none", act: bool = True, padding: int | None = None) -> None:
+    def __init__(
+        self,
+        in_ch: int,
+        out_ch: int,
+        *,
+        kernel: int = 3,
+        stride: int = 1,
+        dilation: int = 1,
+        norm: str = "none",
+        act: bool = True,
+        padding: int | None = None,
+    ) -> None:
         super().__init__(
             conv(in_ch, out_ch, kernel, stride, dilation, bias=norm == "none", padding=padding),
             make_norm(norm, out_ch),

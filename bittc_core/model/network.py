@@ -64,21 +64,36 @@ class BinaryTTCNet(nn.Module):
         self.config = config
         c = config
         self.features = FeatExtractNet(
-            stem_channels=c.stem_channels, out_channels=c.feat_channels,
-            res_blocks=c.feat_res_blocks, pool_sizes=c.spp_pool_sizes,
-            spp_channels=c.spp_channels, norm=c.norm, extra_blocks=c.feat_extra_blocks,
+            stem_channels=c.stem_channels,
+            out_channels=c.feat_channels,
+            res_blocks=c.feat_res_blocks,
+            pool_sizes=c.spp_pool_sizes,
+            spp_channels=c.spp_channels,
+            norm=c.norm,
+            extra_blocks=c.feat_extra_blocks,
         )
         self.segnet = SegNet2D(
-            feat_channels=c.feat_channels, enc_channels=c.enc_channels,
-            dec_channels=c.dec_channels, full_res_skip=c.full_res_skip, norm=c.norm,
-            global_context=c.global_context, extra_blocks=c.dec_extra_blocks,
+            feat_channels=c.feat_channels,
+            enc_channels=c.enc_channels,
+            dec_channels=c.dec_channels,
+            full_res_skip=c.full_res_skip,
+            norm=c.norm,
+            global_context=c.global_context,
+            extra_blocks=c.dec_extra_blocks,
             corr_channels=len(CORR_OFFSETS) * c.corr_groups,
         )
-        self.refine = SegRefineNet(guide_channels=c.guide_channels,
-                                   channels=c.refine_channels, layers=c.refine_layers,
-                                   extra_blocks=c.refine_extra_blocks)
-        self.cont_refine = ContRefineNet(channels=c.cont_channels, dilations=c.cont_dilations,
-                                         norm=c.norm, levels=c.cont_levels if c.cont_refine_levels else 0)
+        self.refine = SegRefineNet(
+            guide_channels=c.guide_channels,
+            channels=c.refine_channels,
+            layers=c.refine_layers,
+            extra_blocks=c.refine_extra_blocks,
+        )
+        self.cont_refine = ContRefineNet(
+            channels=c.cont_channels,
+            dilations=c.cont_dilations,
+            norm=c.norm,
+            levels=c.cont_levels if c.cont_refine_levels else 0,
+        )
 
     # -- per frame ------------------------------------------------------------------
     def extract(self, images: torch.Tensor) -> torch.Tensor:
@@ -92,18 +107,17 @@ class BinaryTTCNet(nn.Module):
         h, w = feat_ref.shape[-2:]
         grid = PaddedGrid.for_features(h, w, self.config.pad_factor, self.config.down_factor)
         terms = self.segnet.prepare(grid.pad(feat_ref), grid)
-        return ReferenceContext(image=image_ref, grid=grid, terms=terms,
-                                guide=self.refine.guide(image_ref))
+        return ReferenceContext(image=image_ref, grid=grid, terms=terms, guide=self.refine.guide(image_ref))
 
     # -- per hypothesis ---------------------------------------------------------------
-    def _coarse(self, ctx: ReferenceContext, warped: torch.Tensor, heads: slice,
-                corr: torch.Tensor | None = None) -> torch.Tensor:
+    def _coarse(
+        self, ctx: ReferenceContext, warped: torch.Tensor, heads: slice, corr: torch.Tensor | None = None
+    ) -> torch.Tensor:
         """(B*K, C, hp, wp) -> logits of ``heads`` (B*K, n, H, W) at input resolution."""
         logits = self.segnet(ctx.terms, warped, ctx.grid, corr)[:, heads]
         return F.interpolate(logits, size=ctx.image.shape[-2:], mode="bilinear", align_corners=False)
 
-    def classify_eta(self, ctx: ReferenceContext, feat_src: torch.Tensor,
-                     eta: torch.Tensor) -> torch.Tensor:
+    def classify_eta(self, ctx: ReferenceContext, feat_src: torch.Tensor, eta: torch.Tensor) -> torch.Tensor:
         """eta thresholds (B, K) -> refined logits of p(eta <= eta_i), (B, K, H, W).
 
         In eval mode on a CPU the hypotheses go through SegNet ``CPU_INFERENCE_HYPOTHESES``
@@ -115,25 +129,24 @@ class BinaryTTCNet(nn.Module):
         chunk = CPU_INFERENCE_HYPOTHESES if not self.training and eta.device.type == "cpu" else k
         refined = []
         for start in range(0, k, chunk):
-            part = eta[:, start:start + chunk]
+            part = eta[:, start : start + chunk]
             warped = scale_warp(feat_src, part, ctx.grid)
             corr = None
             if self.config.corr_groups:
-                corr = scale_correlation(ctx.terms.feat, feat_src, part, warped, ctx.grid,
-                                         self.config.corr_groups, self.config.corr_log_step)
+                corr = scale_correlation(
+                    ctx.terms.feat, feat_src, part, warped, ctx.grid, self.config.corr_groups, self.config.corr_log_step
+                )
             coarse = self._coarse(ctx, warped, slice(HEAD_TTC, HEAD_TTC + 1), corr)
             coarse = coarse.view(b, part.shape[1], *coarse.shape[-2:])
             # the full-resolution refiner runs one threshold at a time: on a CPU a batch of
             # full-size maps falls out of cache and costs ~2x more per map (96x288, 2 cores)
-            refined += [self.refine(ctx.guide, coarse[:, i:i + 1]) for i in range(part.shape[1])]
+            refined += [self.refine(ctx.guide, coarse[:, i : i + 1]) for i in range(part.shape[1])]
         return torch.cat(refined, dim=1)
 
-    def classify_shift(self, ctx: ReferenceContext, feat_src: torch.Tensor,
-                       shift_px: torch.Tensor) -> torch.Tensor:
+    def classify_shift(self, ctx: ReferenceContext, feat_src: torch.Tensor, shift_px: torch.Tensor) -> torch.Tensor:
         """shifts (B, K, 2) [input px] -> logits of p(u > u_i), p(v > v_i), (B, K, 2, H, W)."""
         b, k, _ = shift_px.shape
-        coarse = self._coarse(ctx, shift_warp(feat_src, shift_px / FEATURE_STRIDE, ctx.grid),
-                              slice(HEAD_U, HEAD_V + 1))
+        coarse = self._coarse(ctx, shift_warp(feat_src, shift_px / FEATURE_STRIDE, ctx.grid), slice(HEAD_U, HEAD_V + 1))
         return coarse.reshape(b, k, 2, *coarse.shape[-2:])
 
     def continuous(self, ctx: ReferenceContext, feat_src: torch.Tensor) -> ContinuousOutput:
@@ -147,8 +160,7 @@ class BinaryTTCNet(nn.Module):
         return ContinuousOutput(levels=levels, prob_le=prob_le, eta_auc=eta_auc, log_eta=log_eta)
 
     # -- convenience ----------------------------------------------------------------
-    def forward(self, image_prev: torch.Tensor, image_latest: torch.Tensor,
-                eta: torch.Tensor) -> torch.Tensor:
+    def forward(self, image_prev: torch.Tensor, image_latest: torch.Tensor, eta: torch.Tensor) -> torch.Tensor:
         """One pass without caching: eta (B, K) -> logits of p(eta <= eta_i), (B, K, H, W).
         Both frames go through the extractor as one batch (shared weights)."""
         b = image_prev.shape[0]

@@ -20,12 +20,15 @@ from bittc_core.model.segnet import _broadcast_add
 
 
 class SegRefineNet(nn.Module):
-    def __init__(self, *, guide_channels: int, channels: int, layers: int,
-                 extra_blocks: int = 0) -> None:
+    def __init__(self, *, guide_channels: int, channels: int, layers: int, extra_blocks: int = 0) -> None:
         super().__init__()
         g = guide_channels
         self.guide_net = nn.Sequential(
-            conv(3, g), nn.ReLU(inplace=True), conv(g, g), nn.ReLU(inplace=True), conv(g, g),
+            conv(3, g),
+            nn.ReLU(inplace=True),
+            conv(g, g),
+            nn.ReLU(inplace=True),
+            conv(g, g),
         )
         self.first_guide = conv(g, channels)
         self.first_logit = conv(1, channels, bias=False)

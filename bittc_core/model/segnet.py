@@ -59,17 +59,17 @@ class _MarginBox:
     w: int
 
     @classmethod
-    def around(cls, grid: PaddedGrid, margin: int) -> "_MarginBox":
+    def around(cls, grid: PaddedGrid, margin: int) -> _MarginBox:
         top, left = max(grid.top - margin, 0), max(grid.left - margin, 0)
         bottom = min(grid.top + grid.h + margin, grid.hp)
         right = min(grid.left + grid.w + margin, grid.wp)
         return cls(top, left, bottom, right, grid.top - top, grid.left - left, grid.h, grid.w)
 
     def cut(self, x: torch.Tensor) -> torch.Tensor:
-        return x[..., self.top:self.bottom, self.left:self.right]
+        return x[..., self.top : self.bottom, self.left : self.right]
 
     def inner(self, x: torch.Tensor) -> torch.Tensor:
-        return x[..., self.inner_top:self.inner_top + self.h, self.inner_left:self.inner_left + self.w]
+        return x[..., self.inner_top : self.inner_top + self.h, self.inner_left : self.inner_left + self.w]
 
 
 def _broadcast_add(ref: torch.Tensor, per_hyp: torch.Tensor) -> torch.Tensor:
@@ -97,10 +97,18 @@ class GlobalContext(nn.Module):
 
 
 class SegNet2D(nn.Module):
-    def __init__(self, *, feat_channels: int, enc_channels: tuple[int, ...],
-                 dec_channels: tuple[int, ...], full_res_skip: bool, norm: str,
-                 global_context: bool = False, extra_blocks: int = 0,
-                 corr_channels: int = 0) -> None:
+    def __init__(
+        self,
+        *,
+        feat_channels: int,
+        enc_channels: tuple[int, ...],
+        dec_channels: tuple[int, ...],
+        full_res_skip: bool,
+        norm: str,
+        global_context: bool = False,
+        extra_blocks: int = 0,
+        corr_channels: int = 0,
+    ) -> None:
         super().__init__()
         e, d = enc_channels, dec_channels
         levels = len(e)
@@ -110,8 +118,7 @@ class SegNet2D(nn.Module):
         self.first_post = NormAct(e[0], norm)
         self.first_conv2 = ConvNormAct(e[0], e[0], norm=norm)
         self.down = nn.ModuleList(
-            nn.Sequential(ConvNormAct(e[i - 1], e[i], stride=2, norm=norm),
-                          ConvNormAct(e[i], e[i], norm=norm))
+            nn.Sequential(ConvNormAct(e[i - 1], e[i], stride=2, norm=norm), ConvNormAct(e[i], e[i], norm=norm))
             for i in range(1, levels)
         )
         self.context = GlobalContext(e[-1]) if global_context else None
@@ -119,11 +126,13 @@ class SegNet2D(nn.Module):
         self.fuse = nn.ModuleList()
         prev = e[-1]
         for i in range(levels):
-            self.up.append(nn.Sequential(
-                nn.ConvTranspose2d(prev, d[i], 4, stride=2, padding=1, bias=has_bias),
-                make_norm(norm, d[i]),
-                nn.LeakyReLU(LEAKY_SLOPE, inplace=True),
-            ))
+            self.up.append(
+                nn.Sequential(
+                    nn.ConvTranspose2d(prev, d[i], 4, stride=2, padding=1, bias=has_bias),
+                    make_norm(norm, d[i]),
+                    nn.LeakyReLU(LEAKY_SLOPE, inplace=True),
+                )
+            )
             if i < levels - 1:
                 self.fuse.append(ConvNormAct(d[i] + e[levels - 2 - i], d[i], norm=norm))
             prev = d[i]
@@ -152,8 +161,9 @@ class SegNet2D(nn.Module):
         feat = grid.crop(ref_padded) if self.corr_first is not None else None
         return ReferenceTerms(first=self.first_ref(ref_padded), skip=skip, feat=feat)
 
-    def forward(self, ref: ReferenceTerms, warped: torch.Tensor, grid: PaddedGrid,
-                corr: torch.Tensor | None = None) -> torch.Tensor:
+    def forward(
+        self, ref: ReferenceTerms, warped: torch.Tensor, grid: PaddedGrid, corr: torch.Tensor | None = None
+    ) -> torch.Tensor:
         """warped (B*K, C, hp, wp) -> logits (B*K, 3, h, w), cropped to the unpadded map.
         ``corr`` (B*K, 3G, hp, wp): the correlation volume, when the config has one and
         the hypothesis is a scale (the binary-flow heads run without it).

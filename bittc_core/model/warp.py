@@ -36,7 +36,7 @@ class PaddedGrid:
     left: int
 
     @classmethod
-    def for_features(cls, h: int, w: int, pad_factor: float, multiple: int) -> "PaddedGrid":
+    def for_features(cls, h: int, w: int, pad_factor: float, multiple: int) -> PaddedGrid:
         hp = math.ceil(h * pad_factor / multiple) * multiple
         wp = math.ceil(w * pad_factor / multiple) * multiple
         return cls(h, w, hp, wp, (hp - h) // 2, (wp - w) // 2)
@@ -49,7 +49,7 @@ class PaddedGrid:
 
     def crop(self, x: torch.Tensor) -> torch.Tensor:
         """Inverse of ``pad``: (..., hp, wp) -> (..., h, w)."""
-        return x[..., self.top:self.top + self.h, self.left:self.left + self.w]
+        return x[..., self.top : self.top + self.h, self.left : self.left + self.w]
 
     def base_grid(self, device: torch.device, dtype: torch.dtype) -> torch.Tensor:
         """(hp, wp, 2) normalised (x, y) of padded pixels in the original map
@@ -66,26 +66,26 @@ def _repeat_per_hypothesis(src: torch.Tensor, k: int) -> torch.Tensor:
     return src[:, None].expand(b, k, c, h, w).reshape(b * k, c, h, w)
 
 
-def scale_warp(src: torch.Tensor, eta: torch.Tensor, grid: PaddedGrid,
-               unpadded: bool = False) -> torch.Tensor:
+def scale_warp(src: torch.Tensor, eta: torch.Tensor, grid: PaddedGrid, unpadded: bool = False) -> torch.Tensor:
     """Scale ``src`` (B, C, h, w) about its centre for each eta (B, K) -> (B*K, C, hp, wp),
     or only the unpadded part of that, (B*K, C, h, w), with ``unpadded``."""
     b, k = eta.shape
     base = grid.base_grid(src.device, src.dtype)  # (hp, wp, 2)
     if unpadded:
-        base = base[grid.top:grid.top + grid.h, grid.left:grid.left + grid.w]
+        base = base[grid.top : grid.top + grid.h, grid.left : grid.left + grid.w]
     # normalised coords are centred on c, so c + eta (x - c) -> eta * n(x)
     sample = eta.reshape(b * k, 1, 1, 1).to(src.dtype) * base
-    return F.grid_sample(_repeat_per_hypothesis(src, k), sample, mode="bilinear",
-                         padding_mode="zeros", align_corners=True)
+    return F.grid_sample(
+        _repeat_per_hypothesis(src, k), sample, mode="bilinear", padding_mode="zeros", align_corners=True
+    )
 
 
 def shift_warp(src: torch.Tensor, shift_feat: torch.Tensor, grid: PaddedGrid) -> torch.Tensor:
     """Shift ``src`` (B, C, h, w) by (u, v) [feature px] for each of (B, K, 2) -> (B*K, C, hp, wp)."""
     b, k, _ = shift_feat.shape
     base = grid.base_grid(src.device, src.dtype)
-    scale = torch.tensor([2.0 / max(grid.w - 1, 1), 2.0 / max(grid.h - 1, 1)],
-                         device=src.device, dtype=src.dtype)
+    scale = torch.tensor([2.0 / max(grid.w - 1, 1), 2.0 / max(grid.h - 1, 1)], device=src.device, dtype=src.dtype)
     offset = shift_feat.reshape(b * k, 1, 1, 2).to(src.dtype) * scale
-    return F.grid_sample(_repeat_per_hypothesis(src, k), base - offset, mode="bilinear",
-                         padding_mode="zeros", align_corners=True)
+    return F.grid_sample(
+        _repeat_per_hypothesis(src, k), base - offset, mode="bilinear", padding_mode="zeros", align_corners=True
+    )

@@ -42,12 +42,12 @@ class TrainConfig:
     # binary stage's accuracy (a small model fine-tuned end to end trades them for MiD)
     freeze_binary: bool = False
     # (parameter-name prefix, multiplier) pairs: those parameters learn at lr x multiplier
-    # (``train.loop.param_groups``), e.g. modules added by growth, which start at zero and
+    # (``train.params.param_groups``), e.g. modules added by growth, which start at zero and
     # would otherwise stay small beside weights trained for thousands of steps
     lr_mults: tuple[tuple[str, float], ...] = ()
     val_every: int = 250  # steps between validations (and checkpoints)
     # also keep the weights of every validation step (``RunPaths.snapshot``), e.g. to
-    # average the tail of a run (``docs/average_weights.py``)
+    # average the tail of a run (``bittc weights average``)
     keep_checkpoints: bool = False
     val_limit: int = 64  # validation pairs
     log_every: int = 10  # steps between CSV rows
@@ -57,8 +57,15 @@ class TrainConfig:
     def __post_init__(self) -> None:
         if self.stage not in STAGES:
             raise ValueError(f"stage {self.stage!r}: expected one of {STAGES}")
-        for name in ("steps", "batch_size", "thresholds_per_pair", "shifts_per_pair",
-                     "val_every", "val_limit", "log_every"):
+        for name in (
+            "steps",
+            "batch_size",
+            "thresholds_per_pair",
+            "shifts_per_pair",
+            "val_every",
+            "val_limit",
+            "log_every",
+        ):
             if getattr(self, name) <= 0:
                 raise ValueError(f"{name}={getattr(self, name)}: must be > 0")
         if self.freeze_binary and self.stage != "continuous":

@@ -32,8 +32,9 @@ def open_split(data: str, split: str, *, augment: bool = False, seed: int = 0) -
     try:
         module = importlib.import_module("bittc_core.data.dataset")
     except ImportError as err:
-        raise ConfigError(f"cannot read {data!r}: the dataset loader bittc_core.data.dataset "
-                       f"is not available ({err})") from None
+        raise ConfigError(
+            f"cannot read {data!r}: the dataset loader bittc_core.data.dataset is not available ({err})"
+        ) from None
     try:
         return module.TTCDataset(root, split, augment=augment, seed=seed)
     except (OSError, ValueError) as err:

@@ -15,8 +15,9 @@ from bittc_core.model.flip import flip_views, merge_flip_views
 
 
 @torch.no_grad()
-def flip_averaged_logits(teacher: BinaryTTCNet, image_prev: torch.Tensor, image_latest: torch.Tensor,
-                         eta: torch.Tensor) -> torch.Tensor:
+def flip_averaged_logits(
+    teacher: BinaryTTCNet, image_prev: torch.Tensor, image_latest: torch.Tensor, eta: torch.Tensor
+) -> torch.Tensor:
     """Images (B, 3, H, W), eta thresholds (B, K) -> the teacher's logits of
     p(eta <= eta_i) averaged over the plain and the mirrored pair, (B, K, H, W) in the
     latest frame's grid. The teacher must be in eval mode (batch-norm statistics fixed)."""

@@ -6,8 +6,9 @@ import torch
 import torch.nn.functional as F
 
 
-def masked_bce(logits: torch.Tensor, labels: torch.Tensor, mask: torch.Tensor,
-               weight: torch.Tensor | None = None) -> torch.Tensor:
+def masked_bce(
+    logits: torch.Tensor, labels: torch.Tensor, mask: torch.Tensor, weight: torch.Tensor | None = None
+) -> torch.Tensor:
     """Mean BCE over pixels where ``mask`` (broadcast to the logits' shape) is true;
     with ``weight`` (broadcast likewise) the weighted mean."""
     mask = mask.expand_as(logits)
@@ -20,8 +21,7 @@ def masked_bce(logits: torch.Tensor, labels: torch.Tensor, mask: torch.Tensor,
     return (per_px * w).sum() / w.sum()
 
 
-def masked_smooth_l1(pred: torch.Tensor, target: torch.Tensor, mask: torch.Tensor,
-                     unit: float) -> torch.Tensor:
+def masked_smooth_l1(pred: torch.Tensor, target: torch.Tensor, mask: torch.Tensor, unit: float) -> torch.Tensor:
     """SmoothL1 (beta = 1) of (pred - target) / unit over ``mask``; ``unit`` = one eta bin."""
     if not mask.any():
         return pred.sum() * 0.0

@@ -19,8 +19,7 @@ from bittc_core.model.network import FEATURE_STRIDE
 from bittc_core.ttc import tau_to_eta
 
 
-def sample_eta(b: int, k: int, tau_min_s: float, eta_max: float, dt_s: float,
-               gen: torch.Generator) -> torch.Tensor:
+def sample_eta(b: int, k: int, tau_min_s: float, eta_max: float, dt_s: float, gen: torch.Generator) -> torch.Tensor:
     lo = tau_to_eta(tau_min_s, dt_s)
     return lo + (eta_max - lo) * torch.rand(b, k, generator=gen)
 
@@ -28,8 +27,9 @@ def sample_eta(b: int, k: int, tau_min_s: float, eta_max: float, dt_s: float,
 PIXEL_THRESHOLD_JITTER = 0.02  # [eta] half-width of the jitter of pixel-drawn thresholds
 
 
-def sample_eta_at_pixels(eta: torch.Tensor, mask: torch.Tensor, k: int, tau_min_s: float,
-                         eta_max: float, dt_s: float, gen: torch.Generator) -> torch.Tensor:
+def sample_eta_at_pixels(
+    eta: torch.Tensor, mask: torch.Tensor, k: int, tau_min_s: float, eta_max: float, dt_s: float, gen: torch.Generator
+) -> torch.Tensor:
     """eta, mask (B, H, W) -> (B, k) thresholds at the eta of random valid pixels of each
     pair in [tau_to_eta(tau_min_s), eta_max], jittered, clipped to that range; uniform
     for a pair with no such pixel. On the CPU (``gen`` is a CPU generator)."""
@@ -63,5 +63,4 @@ def shift_labels(flow_px: torch.Tensor, shifts_px: torch.Tensor) -> torch.Tensor
 
 def valid_mask(sample: dict) -> torch.Tensor:
     """(B, H, W) bool: valid pixels with finite eta and flow."""
-    return (sample["valid"] & torch.isfinite(sample["eta"])
-            & torch.isfinite(sample["flow_px"]).all(dim=1))
+    return sample["valid"] & torch.isfinite(sample["eta"]) & torch.isfinite(sample["flow_px"]).all(dim=1)

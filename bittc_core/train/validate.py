@@ -11,7 +11,7 @@ import numpy as np
 import torch
 from torch.utils.data import DataLoader, Dataset, Subset
 
-from bittc_core.metrics import class_counts, inside_geofence, miou_thresholds_s, mid_terms, two_class_iou
+from bittc_core.metrics import class_counts, inside_geofence, mid_terms, miou_thresholds_s, two_class_iou
 from bittc_core.model import BinaryTTCNet
 from bittc_core.train.targets import valid_mask
 from bittc_core.ttc import tau_to_eta
@@ -20,8 +20,9 @@ FLOW_VAL_SHIFTS_PX = (-9.0, 0.0, 9.0)
 
 
 @torch.inference_mode()
-def validate(net: BinaryTTCNet, dataset: Dataset, *, stage: str, limit: int,
-             batch_size: int, device: torch.device) -> dict:
+def validate(
+    net: BinaryTTCNet, dataset: Dataset, *, stage: str, limit: int, batch_size: int, device: torch.device
+) -> dict:
     was_training = net.training
     net.eval()
     subset = Subset(dataset, range(min(limit, len(dataset))))
@@ -40,15 +41,20 @@ def validate(net: BinaryTTCNet, dataset: Dataset, *, stage: str, limit: int,
             pred = (net.classify_shift(ctx, feats[:b], shifts.expand(b, -1, -1)) > 0).cpu().numpy()
             flow = batch["flow_px"].cpu().numpy()
             for i in range(b):
-                per = [two_class_iou(class_counts(pred[i, k, a], flow[i, a] > s[a], mask[i]))
-                       for k, s in enumerate(shifts.tolist()) for a in (0, 1)]
+                per = [
+                    two_class_iou(class_counts(pred[i, k, a], flow[i, a] > s[a], mask[i]))
+                    for k, s in enumerate(shifts.tolist())
+                    for a in (0, 1)
+                ]
                 ious.append(np.nanmean(per))
             continue
         pred = (net.classify_eta(ctx, feats[:b], eta_thr.expand(b, -1)) > 0).cpu().numpy()
         eta = batch["eta"].cpu().numpy()
         for i in range(b):
-            per = [two_class_iou(class_counts(pred[i, k], inside_geofence(eta[i], float(e)), mask[i]))
-                   for k, e in enumerate(eta_thr.tolist())]
+            per = [
+                two_class_iou(class_counts(pred[i, k], inside_geofence(eta[i], float(e)), mask[i]))
+                for k, e in enumerate(eta_thr.tolist())
+            ]
             ious.append(np.nanmean(per))
         if stage == "continuous":
             eta_hat = torch.exp(net.continuous(ctx, feats[:b]).log_eta)[:, 0].cpu().numpy()
@@ -56,5 +62,7 @@ def validate(net: BinaryTTCNet, dataset: Dataset, *, stage: str, limit: int,
                 s, n = mid_terms(eta_hat[i], eta[i], mask[i])
                 mid_sum, mid_n = mid_sum + s, mid_n + n
     net.train(was_training)
-    return {"val_miou": float(np.nanmean(ious)) if ious else float("nan"),
-            "val_mid": mid_sum / mid_n * 1e4 if mid_n else float("nan")}
+    return {
+        "val_miou": float(np.nanmean(ious)) if ious else float("nan"),
+        "val_mid": mid_sum / mid_n * 1e4 if mid_n else float("nan"),
+    }

@@ -53,8 +53,14 @@ def _controller(spec: RunSpec, settings: SweepSettings):
     import controllers
     from controllers.geofence import default_thresholds
 
-    key = (spec.controller, spec.num_alphas, settings.weights, settings.frame_stride, settings.net_backend,
-           settings.onnx)  # fmt: skip
+    key = (
+        spec.controller,
+        spec.num_alphas,
+        settings.weights,
+        settings.frame_stride,
+        settings.net_backend,
+        settings.onnx,
+    )
     if key not in _CONTROLLERS:
         kw = {}
         if spec.controller in controllers.ESTIMATOR_CONTROLLERS:
@@ -92,8 +98,15 @@ def execute_run(spec: RunSpec, settings: SweepSettings, out: str) -> tuple[dict 
     try:
         case = _case(settings, spec.case)
         shutil.rmtree(partial, ignore_errors=True)
-        summary = run_case(case, _controller(spec, settings), CameraConfig(), spec.seed, partial,
-                           video=spec.case in settings.video_cases, latency=parse_latency(spec.latency))
+        summary = run_case(
+            case,
+            _controller(spec, settings),
+            CameraConfig(),
+            spec.seed,
+            partial,
+            video=spec.case in settings.video_cases,
+            latency=parse_latency(spec.latency),
+        )
         shutil.rmtree(final, ignore_errors=True)
         os.replace(partial, final)
         return summary, None
@@ -142,8 +155,9 @@ def run_local(todo: list[RunSpec], settings: SweepSettings, out: Path, workers: 
             pool.join()
 
 
-def run_ray(todo: list[RunSpec], settings: SweepSettings, out: Path, workers: int, address: str | None,
-            on_result) -> None:  # fmt: skip
+def run_ray(
+    todo: list[RunSpec], settings: SweepSettings, out: Path, workers: int, address: str | None, on_result
+) -> None:
     """The same on Ray: a local instance with ``workers`` CPUs, or the cluster at
     ``address`` (whose workers must see ``out`` and have this package installed). A task
     whose worker dies is retried by Ray once; a run that raises is retried once by the

@@ -38,8 +38,13 @@ import math
 BANDS = ("green", "yellow", "orange", "brown", "red")
 BAND_COLOURS = {"green": "#2e9d3a", "yellow": "#f1c40f", "orange": "#e67e22", "brown": "#8b5a2b", "red": "#c0392b"}
 #: VUT speed row [km/h] -> upper edges [km/h] of (yellow, orange, brown); None: the band is not used
-_ROWS = {10: (None, None, None), 20: (None, None, None), 30: (None, None, 10.0), 40: (None, 10.0, 20.0),
-         50: (10.0, 20.0, 30.0)}  # fmt: skip
+_ROWS = {
+    10: (None, None, None),
+    20: (None, None, None),
+    30: (None, None, 10.0),
+    40: (None, 10.0, 20.0),
+    50: (10.0, 20.0, 30.0),
+}
 CAR_TO_CAR_FAMILIES = ("CCRs", "CCRs-offset", "CCRm", "CCRb")
 GATE_FAMILIES = ("CCRs", "CCRs-offset")
 GATE_MAX_SPEED_KPH = 20.0

@@ -43,7 +43,7 @@ class SweepSettings:
         return json.dumps(asdict(self), indent=2, sort_keys=True) + "\n"
 
     @classmethod
-    def from_json(cls, text: str, where: str) -> "SweepSettings":
+    def from_json(cls, text: str, where: str) -> SweepSettings:
         try:
             d = json.loads(text)
             return cls(**{k: tuple(v) if isinstance(v, list) else v for k, v in d.items()})
@@ -102,7 +102,9 @@ def check_settings(s: SweepSettings) -> list:
         raise ConfigError(f"seeds: {s.seeds!r} must be an integer in [1, {MAX_SEEDS}]")
     for name in s.controllers:
         if name not in controllers.REGISTRY and ":" not in name:
-            raise ConfigError(f"unknown controller {name!r}; known: {', '.join(controllers.REGISTRY)} (or module:Class)")
+            raise ConfigError(
+                f"unknown controller {name!r}; known: {', '.join(controllers.REGISTRY)} (or module:Class)"
+            )
     if s.weights is not None and "geofence" not in s.controllers:
         raise ConfigError("weights: apply to the geofence controller, which the sweep does not run")
     if s.weights is not None and not Path(s.weights).is_file():
@@ -126,7 +128,9 @@ def _check_net_backend(s: SweepSettings) -> None:
             raise ConfigError("onnx: an export folder applies to the onnxruntime network backend")
         return
     if "geofence" not in s.controllers:
-        raise ConfigError("net_backend: onnxruntime runs the geofence controller's network, which the sweep does not run")
+        raise ConfigError(
+            "net_backend: onnxruntime runs the geofence controller's network, which the sweep does not run"
+        )
     if s.onnx is None:
         raise ConfigError("onnx: the onnxruntime network backend needs an export folder (`bittc export` makes one)")
     from bittc_core.checkpoint import DEFAULT_WEIGHTS, load_checkpoint

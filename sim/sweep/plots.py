@@ -31,6 +31,7 @@ def _legend(ax, **kw) -> None:
     if ax.get_legend_handles_labels()[0]:
         ax.legend(**kw)
 
+
 def _plt():
     import matplotlib
 
@@ -41,8 +42,9 @@ def _plt():
 
 
 def _save(fig, path: Path) -> None:
-    from bittc_core.atomic import open_temp_beside
     import os
+
+    from bittc_core.atomic import open_temp_beside
 
     fd, tmp = open_temp_beside(path)
     try:
@@ -86,7 +88,9 @@ def _k_plot(ax, summary, value, label_fmt="{c}, {l}"):
     ax.grid(alpha=0.3)
 
 
-def plot_all(out_dir: Path, rows: list[dict], summary: list[dict], frame_dt_s: float, timeline_case: str | None) -> list[str]:
+def plot_all(
+    out_dir: Path, rows: list[dict], summary: list[dict], frame_dt_s: float, timeline_case: str | None
+) -> list[str]:
     """Write the plots into ``out_dir/plots/``; -> their file names."""
     plt = _plt()
     d = out_dir / "plots"
@@ -95,7 +99,7 @@ def plot_all(out_dir: Path, rows: list[dict], summary: list[dict], frame_dt_s: f
 
     fig, ax = plt.subplots(figsize=(6.4, 4))
     _k_plot(ax, est, lambda s: s["latency_ms_mean"])
-    for (c, lat), pts in _by_config(est).items():
+    for pts in _by_config(est).values():
         ax.plot([k for k, _ in pts], [s["latency_ms_p95"] for _, s in pts], ":", color="gray", lw=0.8)
     ax.axhline(frame_dt_s * 1e3, color="k", lw=0.8)
     ax.text(1, frame_dt_s * 1e3, " frame interval: above it frames are skipped", va="bottom", fontsize=8)
@@ -141,8 +145,13 @@ def _impact_plot(plt, path: Path, rows: list[dict]) -> None:
     for i, (c, k, lat) in enumerate(configs):
         pts = [r for r in threats if (r["controller"], r["num_alphas"], r["latency_mode"]) == (c, k, lat)]
         jitter = (i - (len(configs) - 1) / 2) * 0.6
-        ax.scatter([r["ego_speed_kph"] + jitter for r in pts], [r["relative_impact_speed_kph"] or 0.0 for r in pts],
-                   marker=markers[i % len(markers)], s=18, label=config_label(pts[0]))
+        ax.scatter(
+            [r["ego_speed_kph"] + jitter for r in pts],
+            [r["relative_impact_speed_kph"] or 0.0 for r in pts],
+            marker=markers[i % len(markers)],
+            s=18,
+            label=config_label(pts[0]),
+        )
     ax.set_xlabel("ego speed at the start [km/h]")
     ax.set_ylabel("relative impact speed [km/h] (0: avoided)")
     ax.set_ylim(-1, vmax)

@@ -28,65 +28,143 @@ def _esc(x) -> str:
 
 def _table(header: list[str], rows: list[list], left: int = 1) -> str:
     th = "".join(f'<th class="{"l" if i < left else ""}">{_esc(h)}</th>' for i, h in enumerate(header))
-    body = "".join("<tr>" + "".join(f'<td class="{"l" if i < left else ""}">{c}</td>' for i, c in enumerate(r))
-                   + "</tr>" for r in rows)  # fmt: skip
+    body = "".join(
+        "<tr>" + "".join(f'<td class="{"l" if i < left else ""}">{c}</td>' for i, c in enumerate(r)) + "</tr>"
+        for r in rows
+    )
     return f"<table><tr>{th}</tr>{body}</table>"
 
 
 def _summary_table(summary: list[dict]) -> str:
-    header = ["controller", "K", "latency", "avoided", "mean impact [km/h]", "FCW ≥ 2.1 s", "TTC at warning mean / min [s]",
-              "false alarms", "latency mean / p95 [ms]", "skipped", "Euro NCAP G/Y/O/B/R", "CCRs ≤ 20 km/h gate"]  # fmt: skip
+    header = [
+        "controller",
+        "K",
+        "latency",
+        "avoided",
+        "mean impact [km/h]",
+        "FCW ≥ 2.1 s",
+        "TTC at warning mean / min [s]",
+        "false alarms",
+        "latency mean / p95 [ms]",
+        "skipped",
+        "Euro NCAP G/Y/O/B/R",
+        "CCRs ≤ 20 km/h gate",
+    ]
     rows = []
     for s in summary:
         f = lambda v, nd=2: "–" if v is None else f"{v:.{nd}f}"  # noqa: E731
-        rows.append([_esc(s["controller"]), _esc(s["num_alphas"] or "–"), _esc(s["latency_mode"]),
-                     f"{s['threats_avoided']}/{s['threats']}" + (f" ({s['failed']} failed)" if s["failed"] else ""),
-                     f(s["mean_impact_speed_kph"], 1), "–" if s["fcw_pass_rate"] is None else f"{s['fcw_pass_rate']:.0%}",
-                     f"{f(s['ttc_first_warning_mean_s'])} / {f(s['ttc_first_warning_min_s'])}",
-                     f"{s['false_alarms']}/{s['benign_runs']}",
-                     f"{f(s['latency_ms_mean'], 1)} / {f(s['latency_ms_p95'], 1)}",
-                     "–" if s["frames_skipped_share"] is None else f"{s['frames_skipped_share']:.0%}",
-                     "/".join(str(s[f"ncap_{b}"]) for b in ncap.BANDS),
-                     {True: "pass", False: "fail", None: "–"}[s["ncap_ccrs_gate"]]])  # fmt: skip
+        rows.append(
+            [
+                _esc(s["controller"]),
+                _esc(s["num_alphas"] or "–"),
+                _esc(s["latency_mode"]),
+                f"{s['threats_avoided']}/{s['threats']}" + (f" ({s['failed']} failed)" if s["failed"] else ""),
+                f(s["mean_impact_speed_kph"], 1),
+                "–" if s["fcw_pass_rate"] is None else f"{s['fcw_pass_rate']:.0%}",
+                f"{f(s['ttc_first_warning_mean_s'])} / {f(s['ttc_first_warning_min_s'])}",
+                f"{s['false_alarms']}/{s['benign_runs']}",
+                f"{f(s['latency_ms_mean'], 1)} / {f(s['latency_ms_p95'], 1)}",
+                "–" if s["frames_skipped_share"] is None else f"{s['frames_skipped_share']:.0%}",
+                "/".join(str(s[f"ncap_{b}"]) for b in ncap.BANDS),
+                {True: "pass", False: "fail", None: "–"}[s["ncap_ccrs_gate"]],
+            ]
+        )
     return _table(header, rows, left=3)
 
 
 def _runs_table(out_dir: Path, rows: list[dict]) -> str:
-    header = ["run", "scenario", "configuration", "seed", "collision", "rel. impact [km/h]", "band",
-              "TTC warn / brake [s]", "false alarm", "latency [ms]", "files"]  # fmt: skip
+    header = [
+        "run",
+        "scenario",
+        "configuration",
+        "seed",
+        "collision",
+        "rel. impact [km/h]",
+        "band",
+        "TTC warn / brake [s]",
+        "false alarm",
+        "latency [ms]",
+        "files",
+    ]
     out = []
     for r in rows:
         if r["status"] != "ok":
-            out.append([_esc(r["run_id"]), _esc(r["scenario"]), _esc(config_label(r)), _esc(r["seed"]),
-                        f'<b>failed</b>: {_esc(r["error"])}', "", "", "", "", "", ""])  # fmt: skip
+            out.append(
+                [
+                    _esc(r["run_id"]),
+                    _esc(r["scenario"]),
+                    _esc(config_label(r)),
+                    _esc(r["seed"]),
+                    f"<b>failed</b>: {_esc(r['error'])}",
+                    "",
+                    "",
+                    "",
+                    "",
+                    "",
+                    "",
+                ]
+            )
             continue
         band = r["ncap_band"]
         swatch = f'<span class="band" style="background:{ncap.BAND_COLOURS[band]}"></span> {band}' if band else "–"
-        links = [f'<a href="{_esc(r["folder"])}/">folder</a>', f'<a href="{_esc(r["folder"])}/summary.json">summary</a>',
-                 f'<a href="{_esc(r["folder"])}/trace.csv">trace</a>']  # fmt: skip
+        links = [
+            f'<a href="{_esc(r["folder"])}/">folder</a>',
+            f'<a href="{_esc(r["folder"])}/summary.json">summary</a>',
+            f'<a href="{_esc(r["folder"])}/trace.csv">trace</a>',
+        ]
         if (out_dir / r["folder"] / "camera.mp4").is_file():
             links.append(f'<a href="{_esc(r["folder"])}/camera.mp4">video</a>')
-        out.append([_esc(r["run_id"]), _esc(r["scenario"]), _esc(config_label(r)), _esc(r["seed"]),
-                    "yes" if r["collision"] else "no", _esc(r["relative_impact_speed_kph"] or (0 if r["threat"] else None)),
-                    swatch, f'{_esc(r["ttc_at_first_warning_s"])} / {_esc(r["ttc_at_first_brake_s"])}',
-                    "yes" if r["false_alarm"] else "no", _esc(r["latency_ms_mean"]), " · ".join(links)])  # fmt: skip
+        out.append(
+            [
+                _esc(r["run_id"]),
+                _esc(r["scenario"]),
+                _esc(config_label(r)),
+                _esc(r["seed"]),
+                "yes" if r["collision"] else "no",
+                _esc(r["relative_impact_speed_kph"] or (0 if r["threat"] else None)),
+                swatch,
+                f"{_esc(r['ttc_at_first_warning_s'])} / {_esc(r['ttc_at_first_brake_s'])}",
+                "yes" if r["false_alarm"] else "no",
+                _esc(r["latency_ms_mean"]),
+                " · ".join(links),
+            ]
+        )
     return _table(header, out, left=3)
 
 
-def write_report(out_dir: Path, settings_json: str, command: str, summary: list[dict], rows: list[dict],
-                 plots: list[str], notes: list[str], videos: list[str]) -> Path:  # fmt: skip
+def write_report(
+    out_dir: Path,
+    settings_json: str,
+    command: str,
+    summary: list[dict],
+    rows: list[dict],
+    plots: list[str],
+    notes: list[str],
+    videos: list[str],
+) -> Path:
     """Write ``out_dir/report.html``; -> its path."""
-    parts = [f"<!doctype html><html><head><meta charset='utf-8'><title>bittc sweep</title><style>{_CSS}</style></head><body>",
-             "<h1>bittc sweep</h1>", f"<p>Command: <code>{_esc(command)}</code></p>",
-             "<details><summary>Settings (sweep.json)</summary>", f"<pre>{_esc(settings_json)}</pre></details>"]  # fmt: skip
+    parts = [
+        "<!doctype html><html><head><meta charset='utf-8'><title>bittc sweep</title>"
+        f"<style>{_CSS}</style></head><body>",
+        "<h1>bittc sweep</h1>",
+        f"<p>Command: <code>{_esc(command)}</code></p>",
+        "<details><summary>Settings (sweep.json)</summary>",
+        f"<pre>{_esc(settings_json)}</pre></details>",
+    ]
     parts += [f"<p>{_esc(n)}</p>" for n in notes]
-    parts += ["<h2>Summary</h2>", "<p>Per controller, K and latency mode (definitions: <code>sim/sweep/tables.py</code>; "
-              "Euro NCAP bands and gate: <code>sim/sweep/ncap.py</code>). Also as <a href='summary.csv'>summary.csv</a>, "
-              "<a href='summary.md'>summary.md</a>; every run in <a href='results.csv'>results.csv</a>.</p>",
-              _summary_table(summary), "<h2>Plots</h2>"]  # fmt: skip
+    parts += [
+        "<h2>Summary</h2>",
+        "<p>Per controller, K and latency mode (definitions: <code>sim/sweep/tables.py</code>; "
+        "Euro NCAP bands and gate: <code>sim/sweep/ncap.py</code>). Also as <a href='summary.csv'>summary.csv</a>, "
+        "<a href='summary.md'>summary.md</a>; every run in <a href='results.csv'>results.csv</a>.</p>",
+        _summary_table(summary),
+        "<h2>Plots</h2>",
+    ]
     parts += [f'<p><img src="plots/{_esc(p)}" alt="{_esc(p)}"></p>' for p in plots]
     for v in videos:
-        parts.append(f'<p>Video: <a href="{_esc(v)}">{_esc(v)}</a></p><video src="{_esc(v)}" controls width="576"></video>')
+        parts.append(
+            f'<p>Video: <a href="{_esc(v)}">{_esc(v)}</a></p><video src="{_esc(v)}" controls width="576"></video>'
+        )
     parts += ["<h2>Runs</h2>", _runs_table(out_dir, rows), "</body></html>"]
     path = out_dir / "report.html"
     write_text_atomic(path, "\n".join(parts) + "\n")

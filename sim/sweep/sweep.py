@@ -62,8 +62,9 @@ def prepare_out(out: Path, settings: SweepSettings, resume: bool) -> None:
         old = SweepSettings.from_json(path.read_text(), str(path))
         if old != settings:
             diff = [k for k in settings.__dataclass_fields__ if getattr(old, k) != getattr(settings, k)]
-            raise SweepError(f"{out} holds a sweep of other settings ({', '.join(diff)} differ); "
-                             "choose another output folder")
+            raise SweepError(
+                f"{out} holds a sweep of other settings ({', '.join(diff)} differ); choose another output folder"
+            )
         if not resume:
             raise SweepError(f"{out} holds this sweep already; resume it, or choose another output folder")
     elif out.exists() and any(out.iterdir()):
@@ -93,9 +94,17 @@ def _load_summary(out: Path, spec) -> dict | None:
     return json.loads(path.read_text()) if path.is_file() else None
 
 
-def run_sweep(settings: SweepSettings, out: Path, *, workers: int = 1, backend: str = "local",
-              ray_address: str | None = None, resume: bool = False, progress: bool = True,
-              command: str = "") -> SweepOutcome:  # fmt: skip
+def run_sweep(
+    settings: SweepSettings,
+    out: Path,
+    *,
+    workers: int = 1,
+    backend: str = "local",
+    ray_address: str | None = None,
+    resume: bool = False,
+    progress: bool = True,
+    command: str = "",
+) -> SweepOutcome:
     """Run every planned run not finished yet, then write the tables, plots and report."""
     from sim.sweep.execute import run_local, run_ray
 
@@ -148,17 +157,22 @@ def _write_products(out, settings, cases, plan, outcome, command, workers, backe
     summary = summarize(rows)
     outcome.summary_md = write_summary(out, summary)
     plots = plot_all(out, rows, summary, 1.0 / CameraConfig().fps_hz, settings.timeline_case)
-    notes = [f"{outcome.runs} runs; {outcome.executed} executed by the last call in {outcome.seconds:.0f} s "
-             f"on {workers} {backend} worker(s)" + (f" ({outcome.runs_per_min:.1f} runs/min)." if outcome.runs_per_min else ".")]  # fmt: skip
+    notes = [
+        f"{outcome.runs} runs; {outcome.executed} executed by the last call in {outcome.seconds:.0f} s "
+        f"on {workers} {backend} worker(s)"
+        + (f" ({outcome.runs_per_min:.1f} runs/min)." if outcome.runs_per_min else ".")
+    ]
     if "measured" in settings.latencies:
         from sim.sweep.execute import threads_per_worker
 
-        notes.append(f"Measured latency is the wall-clock time of each estimator call on this machine, with "
-                     f"{threads_per_worker(workers)} torch thread(s) per worker: with several workers sharing the "
-                     "CPU's cores each call gets fewer of them and waits for the others, so the measured latency "
-                     "(and with it the skipped frames) grows with the worker count. Compare measured figures only "
-                     "between sweeps run with the same workers on an otherwise idle machine; fixed and profile "
-                     "latencies do not depend on it.")  # fmt: skip
+        notes.append(
+            f"Measured latency is the wall-clock time of each estimator call on this machine, with "
+            f"{threads_per_worker(workers)} torch thread(s) per worker: with several workers sharing the "
+            "CPU's cores each call gets fewer of them and waits for the others, so the measured latency "
+            "(and with it the skipped frames) grows with the worker count. Compare measured figures only "
+            "between sweeps run with the same workers on an otherwise idle machine; fixed and profile "
+            "latencies do not depend on it."
+        )
     if outcome.failed:
         notes.append(f"{len(outcome.failed)} run(s) failed; their errors are in failures.json.")
     videos = [r["folder"] + "/camera.mp4" for r in rows if r["folder"] and (out / r["folder"] / "camera.mp4").is_file()]

@@ -29,18 +29,47 @@ FCW_TTC_S = 2.1  # [s] NHTSA's FCW confirmation test: a warning at TTC >= 2.1 s 
 RUN_KEYS = ("run_id", "status", "error", "config", "ego_speed_kph", "ncap_band", "folder")
 RESULT_COLUMNS = RUN_KEYS + tuple(k for k in SUMMARY_KEYS if k not in RUN_KEYS) + ("fence_lag_s",)
 SUMMARY_COLUMNS = (
-    "controller", "num_alphas", "latency_mode", "runs", "failed", "threats_avoided", "threats", "collisions",
-    "mean_impact_speed_kph", "mean_speed_reduction_kph", "fcw_pass_rate", "ttc_first_warning_mean_s",
-    "ttc_first_warning_min_s", "false_alarms", "benign_runs", "latency_ms_mean", "latency_ms_p95",
-    "frames_skipped_share", "ncap_green", "ncap_yellow", "ncap_orange", "ncap_brown", "ncap_red", "ncap_ccrs_gate",
-)  # fmt: skip
+    "controller",
+    "num_alphas",
+    "latency_mode",
+    "runs",
+    "failed",
+    "threats_avoided",
+    "threats",
+    "collisions",
+    "mean_impact_speed_kph",
+    "mean_speed_reduction_kph",
+    "fcw_pass_rate",
+    "ttc_first_warning_mean_s",
+    "ttc_first_warning_min_s",
+    "false_alarms",
+    "benign_runs",
+    "latency_ms_mean",
+    "latency_ms_p95",
+    "frames_skipped_share",
+    "ncap_green",
+    "ncap_yellow",
+    "ncap_orange",
+    "ncap_brown",
+    "ncap_red",
+    "ncap_ccrs_gate",
+)
 
 
 def result_row(spec, case, summary: dict | None, error: str | None) -> dict:
     row = {k: None for k in RESULT_COLUMNS}
-    row.update(run_id=spec.run_id, config=spec.config_id, controller=spec.controller, num_alphas=spec.num_alphas,
-               latency_mode=spec.latency, seed=spec.seed, scenario=spec.case, family=case.family, threat=case.threat,
-               ego_speed_kph=case.ego.speed_kph)  # fmt: skip
+    row.update(
+        run_id=spec.run_id,
+        config=spec.config_id,
+        controller=spec.controller,
+        num_alphas=spec.num_alphas,
+        latency_mode=spec.latency,
+        seed=spec.seed,
+        scenario=spec.case,
+        family=case.family,
+        threat=case.threat,
+        ego_speed_kph=case.ego.speed_kph,
+    )
     if summary is None:
         row.update(status="failed", error=(error or "").strip().splitlines()[-1] if error else "failed")
         return row
@@ -81,20 +110,27 @@ def summarize(rows: list[dict]) -> list[dict]:
         frames = sum((r["frames_processed"] or 0) + (r["frames_skipped"] or 0) for r in ok)
         bands = [r["ncap_band"] for r in threats if r["ncap_band"]]
         s = {
-            "controller": controller, "num_alphas": k, "latency_mode": latency, "runs": len(rs),
-            "failed": len(rs) - len(ok), "threats_avoided": sum(not r["collision"] for r in threats),
-            "threats": len(threats), "collisions": sum(bool(r["collision"]) for r in threats),
+            "controller": controller,
+            "num_alphas": k,
+            "latency_mode": latency,
+            "runs": len(rs),
+            "failed": len(rs) - len(ok),
+            "threats_avoided": sum(not r["collision"] for r in threats),
+            "threats": len(threats),
+            "collisions": sum(bool(r["collision"]) for r in threats),
             "mean_impact_speed_kph": _mean([r["impact_speed_kph"] or 0.0 for r in threats]),
             "mean_speed_reduction_kph": _mean([r["speed_reduction_kph"] for r in threats]),
             "fcw_pass_rate": round(sum(t >= FCW_TTC_S for t in warned) / len(threats), 3) if threats else None,
-            "ttc_first_warning_mean_s": _mean(warned), "ttc_first_warning_min_s": min(warned) if warned else None,
-            "false_alarms": sum(bool(r["false_alarm"]) for r in benign), "benign_runs": len(benign),
+            "ttc_first_warning_mean_s": _mean(warned),
+            "ttc_first_warning_min_s": min(warned) if warned else None,
+            "false_alarms": sum(bool(r["false_alarm"]) for r in benign),
+            "benign_runs": len(benign),
             "latency_ms_mean": _mean([r["latency_ms_mean"] for r in ok]),
             "latency_ms_p95": _mean([r["latency_ms_p95"] for r in ok]),
             "frames_skipped_share": round(sum(r["frames_skipped"] or 0 for r in ok) / frames, 4) if frames else None,
             **{f"ncap_{b}": bands.count(b) for b in ncap.BANDS},
             "ncap_ccrs_gate": ncap.ccrs_gate(threats),
-        }  # fmt: skip
+        }
         out.append(s)
     return out
 
@@ -116,19 +152,37 @@ def _fmt(v, nd=2) -> str:
 
 
 def markdown_table(summary: list[dict]) -> str:
-    head = ("controller", "K", "latency", "avoided", "mean impact [km/h]", "FCW ≥ 2.1 s", "TTC at warning mean / min [s]",
-            "false alarms", "latency mean / p95 [ms]", "skipped", "Euro NCAP G/Y/O/B/R", "CCRs ≤ 20 gate")  # fmt: skip
+    head = (
+        "controller",
+        "K",
+        "latency",
+        "avoided",
+        "mean impact [km/h]",
+        "FCW ≥ 2.1 s",
+        "TTC at warning mean / min [s]",
+        "false alarms",
+        "latency mean / p95 [ms]",
+        "skipped",
+        "Euro NCAP G/Y/O/B/R",
+        "CCRs ≤ 20 gate",
+    )
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for s in summary:
         gate = {True: "pass", False: "fail", None: "–"}[s["ncap_ccrs_gate"]]
-        cells = (s["controller"], s["num_alphas"] or "–", s["latency_mode"], f"{s['threats_avoided']}/{s['threats']}",
-                 _fmt(s["mean_impact_speed_kph"], 1),
-                 "–" if s["fcw_pass_rate"] is None else f"{s['fcw_pass_rate']:.0%}",
-                 f"{_fmt(s['ttc_first_warning_mean_s'])} / {_fmt(s['ttc_first_warning_min_s'])}",
-                 f"{s['false_alarms']}/{s['benign_runs']}",
-                 f"{_fmt(s['latency_ms_mean'], 1)} / {_fmt(s['latency_ms_p95'], 1)}",
-                 "–" if s["frames_skipped_share"] is None else f"{s['frames_skipped_share']:.0%}",
-                 "/".join(str(s[f"ncap_{b}"]) for b in ncap.BANDS), gate)  # fmt: skip
+        cells = (
+            s["controller"],
+            s["num_alphas"] or "–",
+            s["latency_mode"],
+            f"{s['threats_avoided']}/{s['threats']}",
+            _fmt(s["mean_impact_speed_kph"], 1),
+            "–" if s["fcw_pass_rate"] is None else f"{s['fcw_pass_rate']:.0%}",
+            f"{_fmt(s['ttc_first_warning_mean_s'])} / {_fmt(s['ttc_first_warning_min_s'])}",
+            f"{s['false_alarms']}/{s['benign_runs']}",
+            f"{_fmt(s['latency_ms_mean'], 1)} / {_fmt(s['latency_ms_p95'], 1)}",
+            "–" if s["frames_skipped_share"] is None else f"{s['frames_skipped_share']:.0%}",
+            "/".join(str(s[f"ncap_{b}"]) for b in ncap.BANDS),
+            gate,
+        )
         if s["failed"]:
             cells = cells[:3] + (f"{cells[3]} ({s['failed']} failed)",) + cells[4:]
         lines.append("| " + " | ".join(str(c) for c in cells) + " |")

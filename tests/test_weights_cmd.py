@@ -1,0 +1,79 @@
+"""`bittc weights average|zero`: the mean of checkpoints of one config, and an ablation copy."""
+
+import pytest
+import torch
+
+from bittc_core.checkpoint import CheckpointError, load_checkpoint, make_payload, save_checkpoint
+from bittc_core.checkpoint_ops import average_checkpoints, zero_layers
+from bittc_core.cli import main
+from bittc_core.model import BinaryTTCNet, get_config
+
+
+def saved(path, name, seed):
+    torch.manual_seed(seed)
+    net = BinaryTTCNet(get_config(name))
+    for m in net.modules():  # distinct batch-norm statistics too
+        if isinstance(m, torch.nn.BatchNorm2d):
+            m.running_mean.uniform_(-1, 1)
+            m.num_batches_tracked.fill_(seed + 1)
+    torch.nn.init.uniform_(net.cont_refine.out.weight, -0.1, 0.1)  # starts at zero: give it weights to zero
+    save_checkpoint(path, make_payload(net, name, {"seed": seed}))
+    return str(path), net.state_dict()
+
+
+def test_the_mean_of_two_checkpoints(tmp_path):
+    a, sa = saved(tmp_path / "a.pt", "tiny", 0)
+    b, sb = saved(tmp_path / "b.pt", "tiny", 1)
+    assert main(["weights", "average", a, b, "--out", str(tmp_path / "mean.pt")]) == 0
+    mean = load_checkpoint(tmp_path / "mean.pt", expected_config="tiny")
+    for key, value in mean["state_dict"].items():
+        if value.is_floating_point():
+            torch.testing.assert_close(value, 0.5 * (sa[key] + sb[key]))
+        else:
+            assert torch.equal(value, sa[key])  # counters from the first
+    assert any(not torch.equal(sa[k], sb[k]) for k in sa if sa[k].is_floating_point())  # a real average
+    assert [m["path"] for m in mean["train_meta"]["average_of"]] == [a, b]
+    BinaryTTCNet(get_config("tiny")).load_state_dict(mean["state_dict"])
+
+
+def test_checkpoints_of_different_configs_are_refused(tmp_path):
+    a, _ = saved(tmp_path / "a.pt", "tiny", 0)
+    b, _ = saved(tmp_path / "b.pt", "cpu-small", 1)
+    with pytest.raises(CheckpointError, match="only checkpoints of one config can be averaged"):
+        average_checkpoints([a, b])
+    assert main(["weights", "average", a, b, "--out", str(tmp_path / "mean.pt")]) == 2
+    assert not (tmp_path / "mean.pt").exists()
+
+
+def test_one_checkpoint_or_a_source_as_output_is_refused(tmp_path, capsys):
+    a, _ = saved(tmp_path / "a.pt", "tiny", 0)
+    assert main(["weights", "average", a, "--out", str(tmp_path / "mean.pt")]) == 2
+    assert "two or more" in capsys.readouterr().err
+    b, _ = saved(tmp_path / "b.pt", "tiny", 1)
+    before = (tmp_path / "a.pt").read_bytes()
+    assert main(["weights", "average", a, b, "--out", a]) == 2
+    assert "is one of the sources" in capsys.readouterr().err
+    assert (tmp_path / "a.pt").read_bytes() == before
+    assert not (tmp_path / "mean.pt").exists()
+
+
+def test_zeroing_the_refinement_leaves_the_rest(tmp_path):
+    a, sa = saved(tmp_path / "a.pt", "tiny", 0)
+    assert sa["cont_refine.out.weight"].any()
+    out = tmp_path / "auc_only.pt"
+    assert main(["weights", "zero", a, "--layers", "cont_refine.out", "--out", str(out)]) == 0
+    state = load_checkpoint(out, expected_config="tiny")["state_dict"]
+    for key, value in state.items():
+        if key.startswith("cont_refine.out."):
+            assert not value.any()
+        else:
+            assert torch.equal(value, sa[key]), key
+
+
+def test_zeroing_an_unknown_layer_names_it_and_writes_nothing(tmp_path, capsys):
+    a, _ = saved(tmp_path / "a.pt", "tiny", 0)
+    with pytest.raises(CheckpointError, match="no layer 'segnet.nope'"):
+        zero_layers(a, ["cont_refine.out", "segnet.nope"])
+    assert main(["weights", "zero", a, "--layers", "segnet.nope", "--out", str(tmp_path / "z.pt")]) == 2
+    assert "segnet.nope" in capsys.readouterr().err
+    assert not (tmp_path / "z.pt").exists()
