@@ -104,12 +104,9 @@ def _star(args):
 def run_ray(cfg, split_dir, split, todo, workers, address, progress):
     import ray
 
-    started_here = not ray.is_initialized()
-    if started_here:
-        if address:
-            ray.init(address=address, log_to_driver=False)
-        else:
-            ray.init(num_cpus=workers, include_dashboard=False, log_to_driver=False)
+    from bittc_core.ray_start import start_ray
+
+    started_here = start_ray(workers, address)
     remote = ray.remote(num_cpus=1, max_retries=MAX_ATTEMPTS - 1, retry_exceptions=True)(_make_many)
     cfg_dict = asdict(cfg)
     bar = _progress(len(todo), progress)

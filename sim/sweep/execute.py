@@ -164,12 +164,9 @@ def run_ray(
     driver; either way a run that still fails is reported, never dropped."""
     import ray
 
-    started_here = not ray.is_initialized()
-    if started_here:
-        if address:
-            ray.init(address=address, log_to_driver=False)
-        else:
-            ray.init(num_cpus=workers, include_dashboard=False, log_to_driver=False)
+    from bittc_core.ray_start import start_ray
+
+    started_here = start_ray(workers, address)
     remote = ray.remote(num_cpus=1, max_retries=MAX_TRIES - 1)(_ray_task)
     threads = threads_per_worker(workers)
     tries = {s.index: 0 for s in todo}

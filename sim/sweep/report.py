@@ -8,7 +8,7 @@ import html
 from pathlib import Path
 
 from bittc_core.atomic import write_text_atomic
-from sim.sweep import ncap
+from sim.sweep import ncap, tables
 from sim.sweep.plots import config_label
 
 _CSS = """
@@ -36,40 +36,8 @@ def _table(header: list[str], rows: list[list], left: int = 1) -> str:
 
 
 def _summary_table(summary: list[dict]) -> str:
-    header = [
-        "controller",
-        "K",
-        "latency",
-        "avoided",
-        "mean impact [km/h]",
-        "FCW ≥ 2.1 s",
-        "TTC at warning mean / min [s]",
-        "false alarms",
-        "latency mean / p95 [ms]",
-        "skipped",
-        "Euro NCAP G/Y/O/B/R",
-        "CCRs ≤ 20 km/h gate",
-    ]
-    rows = []
-    for s in summary:
-        f = lambda v, nd=2: "–" if v is None else f"{v:.{nd}f}"  # noqa: E731
-        rows.append(
-            [
-                _esc(s["controller"]),
-                _esc(s["num_alphas"] or "–"),
-                _esc(s["latency_mode"]),
-                f"{s['threats_avoided']}/{s['threats']}" + (f" ({s['failed']} failed)" if s["failed"] else ""),
-                f(s["mean_impact_speed_kph"], 1),
-                "–" if s["fcw_pass_rate"] is None else f"{s['fcw_pass_rate']:.0%}",
-                f"{f(s['ttc_first_warning_mean_s'])} / {f(s['ttc_first_warning_min_s'])}",
-                f"{s['false_alarms']}/{s['benign_runs']}",
-                f"{f(s['latency_ms_mean'], 1)} / {f(s['latency_ms_p95'], 1)}",
-                "–" if s["frames_skipped_share"] is None else f"{s['frames_skipped_share']:.0%}",
-                "/".join(str(s[f"ncap_{b}"]) for b in ncap.BANDS),
-                {True: "pass", False: "fail", None: "–"}[s["ncap_ccrs_gate"]],
-            ]
-        )
-    return _table(header, rows, left=3)
+    rows = [[_esc(c) for c in tables.summary_cells(s)] for s in summary]
+    return _table(list(tables.SUMMARY_HEAD), rows, left=3)
 
 
 def _runs_table(out_dir: Path, rows: list[dict]) -> str:

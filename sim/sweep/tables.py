@@ -151,39 +151,42 @@ def _fmt(v, nd=2) -> str:
     return str(v)
 
 
-def markdown_table(summary: list[dict]) -> str:
-    head = (
-        "controller",
-        "K",
-        "latency",
-        "avoided",
-        "mean impact [km/h]",
-        "FCW ≥ 2.1 s",
-        "TTC at warning mean / min [s]",
-        "false alarms",
-        "latency mean / p95 [ms]",
-        "skipped",
-        "Euro NCAP G/Y/O/B/R",
-        "CCRs ≤ 20 gate",
+SUMMARY_HEAD = (
+    "controller",
+    "K",
+    "latency",
+    "avoided",
+    "mean impact [km/h]",
+    "FCW ≥ 2.1 s",
+    "TTC at warning mean / min [s]",
+    "false alarms",
+    "latency mean / p95 [ms]",
+    "skipped",
+    "Euro NCAP G/Y/O/B/R",
+    "CCRs ≤ 20 gate",
+)
+
+
+def summary_cells(s: dict) -> tuple[str, ...]:
+    """One summary row as the cells of ``SUMMARY_HEAD`` (text)."""
+    avoided = f"{s['threats_avoided']}/{s['threats']}" + (f" ({s['failed']} failed)" if s["failed"] else "")
+    return (
+        str(s["controller"]),
+        str(s["num_alphas"] or "–"),
+        str(s["latency_mode"]),
+        avoided,
+        _fmt(s["mean_impact_speed_kph"], 1),
+        "–" if s["fcw_pass_rate"] is None else f"{s['fcw_pass_rate']:.0%}",
+        f"{_fmt(s['ttc_first_warning_mean_s'])} / {_fmt(s['ttc_first_warning_min_s'])}",
+        f"{s['false_alarms']}/{s['benign_runs']}",
+        f"{_fmt(s['latency_ms_mean'], 1)} / {_fmt(s['latency_ms_p95'], 1)}",
+        "–" if s["frames_skipped_share"] is None else f"{s['frames_skipped_share']:.0%}",
+        "/".join(str(s[f"ncap_{b}"]) for b in ncap.BANDS),
+        {True: "pass", False: "fail", None: "–"}[s["ncap_ccrs_gate"]],
     )
-    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
-    for s in summary:
-        gate = {True: "pass", False: "fail", None: "–"}[s["ncap_ccrs_gate"]]
-        cells = (
-            s["controller"],
-            s["num_alphas"] or "–",
-            s["latency_mode"],
-            f"{s['threats_avoided']}/{s['threats']}",
-            _fmt(s["mean_impact_speed_kph"], 1),
-            "–" if s["fcw_pass_rate"] is None else f"{s['fcw_pass_rate']:.0%}",
-            f"{_fmt(s['ttc_first_warning_mean_s'])} / {_fmt(s['ttc_first_warning_min_s'])}",
-            f"{s['false_alarms']}/{s['benign_runs']}",
-            f"{_fmt(s['latency_ms_mean'], 1)} / {_fmt(s['latency_ms_p95'], 1)}",
-            "–" if s["frames_skipped_share"] is None else f"{s['frames_skipped_share']:.0%}",
-            "/".join(str(s[f"ncap_{b}"]) for b in ncap.BANDS),
-            gate,
-        )
-        if s["failed"]:
-            cells = cells[:3] + (f"{cells[3]} ({s['failed']} failed)",) + cells[4:]
-        lines.append("| " + " | ".join(str(c) for c in cells) + " |")
+
+
+def markdown_table(summary: list[dict]) -> str:
+    lines = ["| " + " | ".join(SUMMARY_HEAD) + " |", "|" + "---|" * len(SUMMARY_HEAD)]
+    lines += ["| " + " | ".join(summary_cells(s)) + " |" for s in summary]
     return "\n".join(lines)
