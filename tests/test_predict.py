@@ -54,45 +54,20 @@ def test_predict_writes_the_maps_of_the_estimator(pair, tmp_path, capsys):
     assert "tau <= 0.5 s" in capsys.readouterr().out
 
 
+def _predict_flow(pair, out, *extra) -> int:
+    """`bittc predict` of the pair with the flow baseline."""
+    return main(
+        ["predict", str(pair / "prev.png"), str(pair / "latest.png"), "--out", str(out), "--method", "flow", *extra]
+    )
+
+
 def test_predict_resizes_and_runs_the_flow_baseline(pair, tmp_path):
     out = tmp_path / "flow"
-    assert (
-        main(
-            [
-                "predict",
-                str(pair / "prev.png"),
-                str(pair / "latest.png"),
-                "--out",
-                str(out),
-                "--method",
-                "flow",
-                "--size",
-                "48x144",
-                "--tau",
-                "1",
-            ]
-        )
-        == 0
-    )
+    assert _predict_flow(pair, out, "--size", "48x144", "--tau", "1") == 0
     z = np.load(out / "prediction.npz")
     assert z["geofence"].shape == (1, 48, 144)
     # the whole frame approaches at tau = 1 s: the baseline puts the inner image inside 1.5 s
-    assert (
-        main(
-            [
-                "predict",
-                str(pair / "prev.png"),
-                str(pair / "latest.png"),
-                "--out",
-                str(out),
-                "--method",
-                "flow",
-                "--tau",
-                "1.5",
-            ]
-        )
-        == 0
-    )
+    assert _predict_flow(pair, out, "--tau", "1.5") == 0
     inner = np.load(out / "prediction.npz")["geofence"][0, 24:72, 72:216]
     assert (inner > 0.5).mean() > 0.8
 

@@ -110,6 +110,22 @@ def test_bad_road_fields_are_rejected(tmp_path, road, needle):
     assert needle in str(e.value)
 
 
+def _refused(tmp_path, patch):
+    """A valid one-actor file with ``patch`` applied: (its path, the ConfigError it raises)."""
+    raw = {
+        "name": "x",
+        "threat": True,
+        "ego": {"speed_kph": 50},
+        "actors": [{"vehicle": "gvt", "headway_s": 5}],
+        **patch,
+    }
+    f = tmp_path / "bad.yaml"
+    f.write_text(yaml.safe_dump(raw))
+    with pytest.raises(ConfigError) as e:
+        scenarios.resolve(str(f))
+    return f, e
+
+
 @pytest.mark.parametrize(
     "patch,needle",
     [
@@ -122,17 +138,7 @@ def test_bad_road_fields_are_rejected(tmp_path, road, needle):
     ],
 )
 def test_non_string_names_are_rejected_naming_the_key(tmp_path, patch, needle):
-    raw = {
-        "name": "x",
-        "threat": True,
-        "ego": {"speed_kph": 50},
-        "actors": [{"vehicle": "gvt", "headway_s": 5}],
-        **patch,
-    }
-    f = tmp_path / "bad.yaml"
-    f.write_text(yaml.safe_dump(raw))
-    with pytest.raises(ConfigError) as e:
-        scenarios.resolve(str(f))
+    f, e = _refused(tmp_path, patch)
     assert str(f) in str(e.value) and needle in str(e.value)
 
 
@@ -153,17 +159,7 @@ def test_non_string_names_are_rejected_naming_the_key(tmp_path, patch, needle):
     ],
 )
 def test_a_list_outside_ego_and_actor_fields_is_refused(tmp_path, patch, key):
-    raw = {
-        "name": "x",
-        "threat": True,
-        "ego": {"speed_kph": 50},
-        "actors": [{"vehicle": "gvt", "headway_s": 5}],
-        **patch,
-    }
-    f = tmp_path / "bad.yaml"
-    f.write_text(yaml.safe_dump(raw))
-    with pytest.raises(ConfigError) as e:
-        scenarios.resolve(str(f))
+    f, e = _refused(tmp_path, patch)
     assert f"{key} = [" in str(e.value) and "only in the fields of ego and of each actor" in str(e.value)
 
 

@@ -43,8 +43,6 @@ def run(args) -> int:
     if any(Path(s).resolve() == out.resolve() for s in sources):
         raise CliError(f"--out {args.out}: is one of the sources; write the result to a new file")
     if args.weights_command == "average":
-        if len(sources) < 2:
-            raise CliError(f"bittc weights average: needs two or more checkpoints, got {len(sources)}")
         payload, what = average_checkpoints(sources), f"mean of {len(sources)} checkpoints"
     else:
         payload, what = zero_layers(args.source, args.layers), f"{', '.join(args.layers)} zeroed"

@@ -9,7 +9,7 @@ from dataclasses import asdict, dataclass, field
 
 from bittc_core.data.format import sample_dirname
 from bittc_core.data.gen_config import LOCAL_CHUNK, MAX_ATTEMPTS, RAY_CHUNK, STEADY_MIN_S, STEADY_MIN_SAMPLES
-from bittc_core.data.gen_worker import _close_worker, _make_many, _worker_init, make_sample
+from bittc_core.data.gen_worker import close_worker, make_many, make_sample, worker_init
 
 
 def _progress(total: int, enabled: bool):
@@ -81,7 +81,7 @@ def run_local(cfg, split_dir, split, todo, workers, _addr, progress):
         import multiprocessing as mp
 
         pool = mp.get_context("spawn").Pool(
-            workers, initializer=_worker_init, initargs=(cfg_dict,), maxtasksperchild=2000
+            workers, initializer=worker_init, initargs=(cfg_dict,), maxtasksperchild=2000
         )
     try:
         while queue:
@@ -93,7 +93,7 @@ def run_local(cfg, split_dir, split, todo, workers, _addr, progress):
         if pool is not None:
             pool.close()
             pool.join()
-        _close_worker()
+        close_worker()
     return tally
 
 
@@ -107,7 +107,7 @@ def run_ray(cfg, split_dir, split, todo, workers, address, progress):
     from bittc_core.ray_start import start_ray
 
     started_here = start_ray(workers, address)
-    remote = ray.remote(num_cpus=1, max_retries=MAX_ATTEMPTS - 1, retry_exceptions=True)(_make_many)
+    remote = ray.remote(num_cpus=1, max_retries=MAX_ATTEMPTS - 1, retry_exceptions=True)(make_many)
     cfg_dict = asdict(cfg)
     bar = _progress(len(todo), progress)
     tally = _Tally(todo, bar, split)

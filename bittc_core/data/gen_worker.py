@@ -20,7 +20,7 @@ from bittc_core.data.gen_config import GC_THRESHOLDS, GenerationConfig, sample_s
 _WORKER: dict = {}
 
 
-def _worker_init(cfg_dict: dict) -> None:
+def worker_init(cfg_dict: dict) -> None:
     """Per-process state: the camera, a texture bank in a private temporary folder and
     (made at the first sample) one World rebuilt in place for every sample."""
     os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
@@ -30,7 +30,7 @@ def _worker_init(cfg_dict: dict) -> None:
     from sim.textures import TextureBank
 
     cv2.setNumThreads(1)
-    _close_worker()
+    close_worker()
     cfg = GenerationConfig(**cfg_dict)
     bank_dir = Path(tempfile.mkdtemp(prefix="bittc_bank_"))
     _WORKER.update(
@@ -43,14 +43,14 @@ def _worker_init(cfg_dict: dict) -> None:
     )
 
 
-def _drop_world() -> None:
+def drop_world() -> None:
     world = _WORKER.pop("world", None)
     if world is not None:
         world.close()
 
 
-def _close_worker() -> None:
-    _drop_world()
+def close_worker() -> None:
+    drop_world()
     if "bank_dir" in _WORKER:
         shutil.rmtree(_WORKER.pop("bank_dir"), ignore_errors=True)
     _WORKER.clear()
@@ -63,7 +63,7 @@ def make_sample(cfg_dict: dict, split_dir: str, split: str, index: int) -> tuple
     from sim.world import World
 
     if _WORKER.get("cfg") != GenerationConfig(**cfg_dict):
-        _worker_init(cfg_dict)
+        worker_init(cfg_dict)
     t0 = time.perf_counter()
     cfg = _WORKER["cfg"]
     try:
@@ -88,9 +88,9 @@ def make_sample(cfg_dict: dict, split_dir: str, split: str, index: int) -> tuple
         )
         return index, time.perf_counter() - t0, None
     except Exception:  # reported to the driver, retried there with a fresh world
-        _drop_world()
+        drop_world()
         return index, time.perf_counter() - t0, traceback.format_exc(limit=4)
 
 
-def _make_many(cfg_dict: dict, split_dir: str, split: str, indices: list[int]) -> list[tuple[int, float, str | None]]:
+def make_many(cfg_dict: dict, split_dir: str, split: str, indices: list[int]) -> list[tuple[int, float, str | None]]:
     return [make_sample(cfg_dict, split_dir, split, i) for i in indices]
