@@ -47,6 +47,10 @@ class Calibration:
     centre ``mount_height_m`` above the ground and ``mount_forward_m`` ahead of the
     centre of the ego's footprint. Camera-plane TTC (the estimator's) counts to the
     plane through the optical centre; the front bumper lies ``bumper_ahead_m`` ahead.
+
+    ``fovea``: the calibration of the camera's second, magnified view (same optical
+    centre, mount and pitch; focal x zoom, principal point on the horizon point straight
+    ahead), or None for a camera with one view.
     """
 
     width_px: int
@@ -61,45 +65,72 @@ class Calibration:
     frame_dt_s: float  # [s] camera frame interval
     ego_length_m: float  # [m] the ego's footprint
     ego_width_m: float  # [m]
+    fovea: Calibration | None = None  # the magnified view of the same camera, if any
 
     @property
     def bumper_ahead_m(self) -> float:
         """[m] front bumper ahead of the camera plane (along the ego's x axis)."""
         return self.ego_length_m / 2 - self.mount_forward_m
 
+    @property
+    def views(self) -> dict[str, Calibration]:
+        """'wide' -> this view (without its fovea), and 'fovea' -> the fovea where there is one."""
+        from dataclasses import replace
+
+        out = {"wide": replace(self, fovea=None)}
+        if self.fovea is not None:
+            out["fovea"] = self.fovea
+        return out
+
     @classmethod
     def from_camera(cls, camera, ego_size_m: tuple[float, ...]) -> Calibration:
-        """From a ``sim.camera.CameraConfig`` and the ego's (length, width[, height]) [m]."""
-        fx, fy, cx, cy = (float(x) for x in camera.intrinsics())
-        return cls(
-            camera.width_px,
-            camera.height_px,
-            fx,
-            fy,
-            cx,
-            cy,
-            camera.mount_height_m,
-            camera.mount_forward_m,
-            camera.pitch_deg,
-            camera.dt_s,
-            float(ego_size_m[0]),
-            float(ego_size_m[1]),
-        )
+        """From a ``sim.camera.CameraConfig`` (both of its views) and the ego's
+        (length, width[, height]) [m]."""
+
+        def one(view, fovea=None) -> Calibration:
+            return cls(
+                view.width_px,
+                view.height_px,
+                float(view.fx_px),
+                float(view.fy_px),
+                float(view.cx_px),
+                float(view.cy_px),
+                camera.mount_height_m,
+                camera.mount_forward_m,
+                camera.pitch_deg,
+                camera.dt_s,
+                float(ego_size_m[0]),
+                float(ego_size_m[1]),
+                fovea,
+            )
+
+        fovea = camera.fovea()
+        return one(camera.wide(), one(fovea) if fovea is not None else None)
 
 
 @dataclass(frozen=True)
 class Observation:
+    """What a deployable controller sees in one job. With a fovea (``calibration.fovea``),
+    ``fovea_latest`` / ``fovea_prev`` are the same two captures through the magnified view."""
+
     t_s: float  # capture time of the latest frame [s]
     ego_speed_mps: float  # the ego's speed at that capture [m/s]
     image_latest: np.ndarray | None  # (H, W, 3) uint8 RGB; None when the controller needs no camera
     image_prev: np.ndarray | None  # the frame captured frame_stride frames before, same format
     dt_s: float  # [s] time between the two frames of the pair
     calibration: Calibration | None = None
+    fovea_latest: np.ndarray | None = None  # (H, W, 3) uint8 RGB through the fovea; None without one
+    fovea_prev: np.ndarray | None = None
+
+    def pair(self, view: str) -> tuple[np.ndarray | None, np.ndarray | None]:
+        """(prev, latest) images of view 'wide' or 'fovea'."""
+        return (self.image_prev, self.image_latest) if view == "wide" else (self.fovea_prev, self.fovea_latest)
 
 
 @dataclass(frozen=True)
 class GeofenceView:
-    """What a geofence controller saw in one job, for videos and fence-lag measurement.
+    """What a geofence controller saw in one job through one camera view, for videos and
+    fence-lag measurement.
 
     ``maps``: (K, H, W) float32 p(0 < tau <= thresholds_s[i]) of the latest frame;
     ``counted``: (H, W) bool, the in-path regions that counted as evidence for any fence;
@@ -117,6 +148,11 @@ class BrakeCommand:
     warning: bool = False  # forward-collision warning on
     telemetry: Mapping[str, Any] = field(default_factory=dict, compare=False)  # scalars for trace.csv
     view: GeofenceView | None = field(default=None, compare=False)  # maps behind the decision, if any
+    fovea_view: GeofenceView | None = field(default=None, compare=False)  # the same through the fovea
+
+    def views(self) -> dict[str, GeofenceView]:
+        """'wide' / 'fovea' -> the maps behind the decision in that view (those that exist)."""
+        return {k: v for k, v in (("wide", self.view), ("fovea", self.fovea_view)) if v is not None}
 
     def check(self, who: str) -> None:
         """Refuse a command that is not a deceleration [m/s^2] >= 0."""
@@ -131,8 +167,18 @@ class Controller(ABC):
     name: str = "controller"
     needs_camera: bool = False  # the loop renders frames and hands over pairs
     uses_ground_truth: bool = False  # oracles only
-    num_alphas: int = 0  # thresholds evaluated per job (the K a latency profile charges)
+    num_alphas: int = 0  # thresholds evaluated per job and view (the K a latency profile charges)
     frame_stride: int = 1  # the pair is (frame k - frame_stride, frame k)
+    # what a device profile charges per job (sim.latency): the estimator family, None for none;
+    # the camera views it runs on (set by ``reset`` from the calibration); its feature cache [frames]
+    estimator_kind: str | None = None
+    views: tuple[str, ...] = ("wide",)
+    cached_frames: int = 0
+
+    @property
+    def job_thresholds(self) -> int:
+        """Thresholds evaluated per job, summed over the views."""
+        return self.num_alphas * len(self.views)
 
     def reset(self, calibration: Calibration) -> None:  # noqa: B027 (an optional hook)
         """Forget any state from a previous run; ``calibration`` is this run's car."""

@@ -59,6 +59,13 @@ extra compute (the estimator caches every frame's features). Measured with
 ``docs/controller_levers.py``: on 24 cases 14 of 19 threats avoided against 10 of 19 at
 stride 1, no false alarm either way.
 
+**Two views** (a calibration with a ``fovea``): the same rules run on each view with
+its own calibration (corridor, ground rule, standing regions, persistence), each view
+with its own estimator cache; tau_hat is the smallest threshold fired in either view,
+so the most urgent stage over both views decides. ``fovea_fences_from_s`` keeps the
+fences below it on the wide view only (the fovea sees the road from about 13 m on at
+zoom 4, where the short fences are decided anyway); 0 runs every fence in both.
+
 **Thresholds**: explicit (any order, each within the estimator's trained range), or
 ``default_thresholds(K)``: K values spaced uniformly in log tau over
 ``DEFAULT_TAU_RANGE_S`` (0.8-2.8 s; K = 1: their geometric mean, 1.5 s). With a frame
@@ -126,6 +133,7 @@ class GeofenceConfig:
     release_frames: int = 3  # [jobs] without any fence firing before braking is released
     min_speed_mps: float = 1.0  # [m/s] below this: no warning, no braking
     frame_stride: int = 2  # [frames] the pair is (k - stride, k): twice the motion per pair
+    fovea_fences_from_s: float = 0.0  # [s] with a fovea: fences below this run on the wide view only
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "thresholds_s", check_thresholds(self.thresholds_s))
@@ -140,6 +148,7 @@ class GeofenceConfig:
             "release_frames": self.release_frames >= 1,
             "min_speed_mps": self.min_speed_mps >= 0,
             "frame_stride": isinstance(self.frame_stride, int) and 1 <= self.frame_stride <= 10,
+            "fovea_fences_from_s": math.isfinite(self.fovea_fences_from_s) and self.fovea_fences_from_s >= 0,
         }
         for name, ok in checks.items():
             if not ok:
@@ -194,36 +203,61 @@ class GeofenceController(Controller):
         self.name = name
         self.num_alphas = len(self.cfg.thresholds_s)
         self.frame_stride = self.cfg.frame_stride
+        self.estimator_kind = estimator.name if estimator.name in ("bittc", "flow") else None
+        self.cached_frames = int(getattr(estimator, "cached_frames", 0))
         self._order = np.argsort(self.cfg.thresholds_s)  # fences from the smallest threshold up
         self._thr = np.asarray(self.cfg.thresholds_s, dtype=np.float64)[self._order]
         self._stages = StagedBrake(self.cfg.stages)
+        self._estimators = {"wide": estimator}  # one per view: each its own frame cache
         self.cal: Calibration | None = None
         self._warm = False
 
+    @property
+    def job_thresholds(self) -> int:
+        return sum(len(f) for f in self._fences.values()) if self.cal is not None else self.num_alphas
+
     def reset(self, calibration: Calibration) -> None:
         self.cal = calibration
+        self._cals = calibration.views
+        self.views = tuple(self._cals)
         self._thr_est = estimator_thresholds(self.estimator, self._thr, calibration.frame_dt_s, self.frame_stride)
+        # fence indices (into the sorted thresholds) evaluated per view
+        self._fences = {"wide": np.arange(len(self._thr))}
+        if "fovea" in self._cals:
+            self._fences["fovea"] = np.flatnonzero(self._thr >= self.cfg.fovea_fences_from_s - 1e-9)
+            if not self._fences["fovea"].size:
+                raise ConfigError(
+                    f"GeofenceConfig.fovea_fences_from_s = {self.cfg.fovea_fences_from_s:g} s leaves the fovea "
+                    f"no fence (largest {self._thr.max():g} s)"
+                )
+            if "fovea" not in self._estimators:
+                fork = getattr(self.estimator, "fork", None)
+                self._estimators["fovea"] = fork() if fork is not None else self.estimator
         if not self._warm:  # the first call of a network pays one-off costs no deployed system pays per frame
             blank = np.zeros((calibration.height_px, calibration.width_px, 3), np.uint8)
             self.estimator.geofence(blank, blank + 1, self._thr_est)
             self._warm = True
-        if hasattr(self.estimator, "reset"):
-            self.estimator.reset()
+        for est in self._estimators.values():
+            if hasattr(est, "reset"):
+                est.reset()
         self._stages.reset()
-        self._streak = np.zeros(len(self._thr), dtype=np.int64)
+        self._streak = {v: np.zeros(len(f), dtype=np.int64) for v, f in self._fences.items()}
         self._quiet = self.cfg.release_frames  # nothing to hold at the start
         self._last = BrakeCommand()
 
-    def _evidence(self, maps: np.ndarray, speed_mps: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Sorted (K, H, W) maps -> (in-path region size per fence [px], counted mask, corridor mask)."""
-        cal, c = self.cal, self.cfg
+    def _evidence(
+        self, maps: np.ndarray, thr: np.ndarray, cal: Calibration, speed_mps: float
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Sorted (K, H, W) maps of fences ``thr`` [s] in the view of ``cal`` -> (in-path region
+        size per fence [px], counted mask, corridor mask)."""
+        c = self.cfg
         tau_ground = ground_ttc_per_row(cal, speed_mps)
         half_w = cal.ego_width_m / 2 + c.corridor_margin_m
         counted = np.zeros(maps.shape[1:], dtype=bool)
         corridor = np.zeros(maps.shape[1:], dtype=bool)
-        sizes = np.zeros(len(self._thr), dtype=np.int64)
+        sizes = np.zeros(len(thr), dtype=np.int64)
         below = np.append(tau_ground[1:], tau_ground[-1])  # the ground one row lower
-        for i, tau in enumerate(self._thr):
+        for i, tau in enumerate(thr):
             rows = (tau_ground > c.ground_margin * tau) & (below > c.ground_margin * tau)
             if not rows.any():
                 continue
@@ -240,21 +274,40 @@ class GeofenceController(Controller):
             corridor |= region
         return sizes, counted, corridor
 
+    def _fired(self, view: str, sizes: np.ndarray) -> np.ndarray:
+        """In-path region sizes of a view's fences -> which fences fire (nested, persistent)."""
+        hits = sizes >= self.cfg.min_region_px
+        if self.cfg.nested:  # what is inside tau_i is inside every larger fence too
+            larger = np.append(np.logical_or.accumulate(hits[::-1])[::-1][1:], True)
+            hits &= larger
+        self._streak[view] = np.where(hits, self._streak[view] + 1, 0)
+        return self._streak[view] >= self.cfg.persistence_frames
+
     def act(self, obs: Observation, truth) -> BrakeCommand:
         if self.cal is None:
             raise RuntimeError("call reset(calibration) before act()")
-        t0 = time.perf_counter()
-        maps = self.estimator.geofence(obs.image_prev, obs.image_latest, self._thr_est)
-        est_ms = (time.perf_counter() - t0) * 1e3
         c, s = self.cfg, float(obs.ego_speed_mps)
-        sizes, counted, corridor = self._evidence(maps, s)
-        hits = sizes >= c.min_region_px
-        if c.nested:  # what is inside tau_i is inside every larger fence too
-            larger = np.append(np.logical_or.accumulate(hits[::-1])[::-1][1:], True)
-            hits &= larger
-        self._streak = np.where(hits, self._streak + 1, 0)
-        fired = self._streak >= c.persistence_frames
-        tau_hat = float(self._thr[np.argmax(fired)]) if fired.any() else None
+        est_ms = 0.0
+        tel: dict = {}
+        views: dict[str, GeofenceView] = {}
+        fired_at: dict[str, float] = {}  # view -> smallest fired threshold [s]
+        for v, idx in self._fences.items():
+            prev, latest = obs.pair(v)
+            if latest is None or prev is None:
+                raise ValueError(f"controller {self.name!r}: the observation has no {v} pair")
+            thr = self._thr[idx]
+            t0 = time.perf_counter()
+            maps = self._estimators[v].geofence(prev, latest, self._thr_est[idx])
+            est_ms += (time.perf_counter() - t0) * 1e3
+            sizes, counted, corridor = self._evidence(maps, thr, self._cals[v], s)
+            fired = self._fired(v, sizes)
+            if fired.any():
+                fired_at[v] = float(thr[np.argmax(fired)])
+            tag = "" if v == "wide" else f"{v}_"
+            for tau, n in zip(thr, sizes):
+                tel[f"inpath_px_{tag}{tau:g}s"] = int(n)
+            views[v] = GeofenceView(tuple(float(t) for t in thr), maps, counted, corridor)
+        tau_hat = min(fired_at.values()) if fired_at else None
         if s < c.min_speed_mps:
             cmd, stage = self._stages.release(), "standstill"
         elif tau_hat is None:
@@ -272,21 +325,26 @@ class GeofenceController(Controller):
             required = s / (2 * max(tau_hat - offset_s, 0.05))
             cmd = self._stages.update(*reached, required)
             stage = "full" if reached[2] else "partial" if reached[1] else "warn" if reached[0] else "fence"
+        fired_views = [v for v, t in fired_at.items() if t == tau_hat]
         tel = {
             "estimator_ms": round(est_ms, 3),
             "fence_fired_s": tau_hat if tau_hat is not None else "",
+            "fired_view": "+".join(fired_views),
             "stage": stage,
+            **tel,
         }
-        for tau, n in zip(self._thr, sizes):
-            tel[f"inpath_px_{tau:g}s"] = int(n)
-        view = GeofenceView(tuple(float(t) for t in self._thr), maps, counted, corridor)
         self._last = BrakeCommand(cmd.decel_mps2, cmd.warning)
-        return BrakeCommand(cmd.decel_mps2, cmd.warning, telemetry=tel, view=view)
+        return BrakeCommand(
+            cmd.decel_mps2, cmd.warning, telemetry=tel, view=views["wide"], fovea_view=views.get("fovea")
+        )
 
 
-def _config(thresholds_s, frame_stride: int | None) -> GeofenceConfig:
+def _config(thresholds_s, frame_stride: int | None, fovea_fences_from_s: float | None = None) -> GeofenceConfig:
     thr = tuple(thresholds_s) if thresholds_s is not None else default_thresholds(4)
-    return GeofenceConfig(thresholds_s=thr, **({} if frame_stride is None else {"frame_stride": frame_stride}))
+    kw = {} if frame_stride is None else {"frame_stride": frame_stride}
+    if fovea_fences_from_s is not None:
+        kw["fovea_fences_from_s"] = float(fovea_fences_from_s)
+    return GeofenceConfig(thresholds_s=thr, **kw)
 
 
 def make_geofence(
@@ -297,6 +355,7 @@ def make_geofence(
     name: str = "geofence",
     backend: str = "torch",
     onnx: str | None = None,
+    fovea_fences_from_s: float | None = None,
 ) -> GeofenceController:
     """The shipped network (or ``weights``) behind the geofence controller; ``backend=
     "onnxruntime", onnx=DIR``: the same weights exported to ``DIR`` (checked against them)."""
@@ -307,11 +366,14 @@ def make_geofence(
         est = make_estimator("bittc", weights=weights or DEFAULT_WEIGHTS, backend=backend, onnx=onnx)
     else:
         est = make_estimator("bittc", weights=weights, device=device, backend=backend, onnx=onnx)
-    return GeofenceController(est, _config(thresholds_s, frame_stride), name=name)
+    return GeofenceController(est, _config(thresholds_s, frame_stride, fovea_fences_from_s), name=name)
 
 
-def make_flow(thresholds_s=None, frame_stride: int | None = None, name: str = "flow") -> GeofenceController:
+def make_flow(
+    thresholds_s=None, frame_stride: int | None = None, name: str = "flow", fovea_fences_from_s: float | None = None
+) -> GeofenceController:
     """The DIS + affine-expansion baseline behind the same controller logic."""
     from bittc_core.estimator import make_estimator
 
-    return GeofenceController(make_estimator("flow"), _config(thresholds_s, frame_stride), name=name)
+    cfg = _config(thresholds_s, frame_stride, fovea_fences_from_s)
+    return GeofenceController(make_estimator("flow"), cfg, name=name)

@@ -9,6 +9,19 @@ Convention:
     Pixel coordinates: (u, v) = (column, row); pixel centres at integer coordinates,
     so the principal point of a centred camera is ((W - 1) / 2, (H - 1) / 2).
     ``cam_T_world`` maps homogeneous world points to camera points.
+
+Two views of one sensor: the **wide** view is the camera as configured; the **fovea**
+(``fovea_zoom`` Z) is a second pinhole with the same optical centre, the same
+orientation and the same pixel count, focal length x Z, its principal point placed so
+that the ego's road-forward direction (the horizon point straight ahead, at the nominal
+pitch) falls on its centre pixel. It is exactly the crop of a Z-times-larger sensor: a
+3D point at wide pixel (u, v) lies at fovea pixel
+
+    u_f = Z (u - cx) + cx_f,    v_f = Z (v - cy) + cy_f
+
+(``fovea_from_wide``; checked in ``tests/test_fovea.py``). Its frustum is off-axis
+(``Pinhole.projection_matrix_gl``), and rendering it costs one more image of the same
+pixel count, not Z^2 more.
 """
 
 from __future__ import annotations
@@ -23,6 +36,75 @@ GL_FROM_CV = np.diag([1.0, -1.0, -1.0, 1.0])
 # Camera axes (OpenCV) expressed in the ego frame at zero pitch/yaw/roll:
 # x_cam = -y_ego, y_cam = -z_ego, z_cam = x_ego.
 _CV_FROM_EGO_AXES = np.array([[0.0, -1.0, 0.0], [0.0, 0.0, -1.0], [1.0, 0.0, 0.0]])
+MAX_FOVEA_ZOOM = 16.0  # [-] a larger zoom sees under 2 deg at the default 30 deg
+VIEWS = ("wide", "fovea")
+
+
+def check_fovea_zoom(zoom) -> float | None:
+    """None (no fovea) or a finite zoom in [1, MAX_FOVEA_ZOOM]; anything else is refused by value."""
+    if zoom is None:
+        return None
+    if isinstance(zoom, bool) or not isinstance(zoom, (int, float)) or not math.isfinite(zoom):
+        raise ValueError(f"fovea zoom {zoom!r}: must be a finite number in [1, {MAX_FOVEA_ZOOM:g}] (or off)")
+    if not 1.0 <= zoom <= MAX_FOVEA_ZOOM:
+        raise ValueError(f"fovea zoom {zoom!r}: must lie in [1, {MAX_FOVEA_ZOOM:g}] (or off)")
+    return float(zoom)
+
+
+@dataclass(frozen=True)
+class Pinhole:
+    """One view: image size and intrinsics [px] (pixel centres at integers), clipping planes [m]."""
+
+    height_px: int
+    width_px: int
+    fx_px: float
+    fy_px: float
+    cx_px: float
+    cy_px: float
+    near_m: float
+    far_m: float
+
+    def K(self) -> np.ndarray:
+        return np.array([[self.fx_px, 0, self.cx_px], [0, self.fy_px, self.cy_px], [0, 0, 1.0]])
+
+    def intrinsics(self) -> np.ndarray:
+        """(fx, fy, cx, cy) [px]."""
+        return np.array([self.fx_px, self.fy_px, self.cx_px, self.cy_px])
+
+    def project(self, p_cam: np.ndarray) -> np.ndarray:
+        """(N, 3) OpenCV camera points -> (N, 2) pixels (u, v)."""
+        p = np.atleast_2d(np.asarray(p_cam, dtype=np.float64))
+        return np.stack([self.fx_px * p[:, 0] / p[:, 2] + self.cx_px, self.fy_px * p[:, 1] / p[:, 2] + self.cy_px], 1)
+
+    def projection_matrix_gl(self, scale: int = 1) -> list[float]:
+        """OpenGL projection matrix (column-major, 16 floats) for PyBullet, off-axis where
+        the principal point is not the image centre.
+
+        ``scale`` is the render resolution over the output resolution: output pixel u
+        covers render pixels s u .. s u + s - 1, so the render's principal point is
+        s cx + (s - 1) / 2. TinyRenderer samples render pixel (i, r) (r counted from the
+        bottom row) at NDC (2 i / W - 1, 2 r / H - 1), i.e. at its corner; the third column
+        puts those samples at the pixel centres of these intrinsics (checked in
+        ``tests/test_camera.py`` and ``tests/test_fovea.py``).
+        """
+        w, h = self.width_px * scale, self.height_px * scale
+        cx = scale * self.cx_px + (scale - 1) / 2
+        cy = scale * self.cy_px + (scale - 1) / 2
+        n, fa = self.near_m, self.far_m
+        P = np.array(
+            [
+                [2 * self.fx_px / self.width_px, 0, 1 - 2 * cx / w, 0],
+                [0, 2 * self.fy_px / self.height_px, (2 * cy + 2 - h) / h, 0],
+                [0, 0, (fa + n) / (n - fa), 2 * fa * n / (n - fa)],
+                [0, 0, -1, 0],
+            ]
+        )
+        return P.T.reshape(-1).tolist()
+
+    def linear_depth(self, depth_buffer: np.ndarray) -> np.ndarray:
+        """Depth Z along the optical axis [m] from PyBullet's non-linear depth buffer."""
+        n, fa = self.near_m, self.far_m
+        return (fa * n / (fa - (fa - n) * depth_buffer)).astype(np.float32)
 
 
 @dataclass(frozen=True)
@@ -43,8 +125,10 @@ class CameraConfig:
     far_m: float = 400.0  # far clipping plane [m]
     supersample: int = 1  # render at this factor and average down (anti-aliasing)
     jitter_deg: float = 0.0  # std of per-frame pitch/yaw/roll jitter [deg]
+    fovea_zoom: float | None = None  # [-] focal of the fovea over the wide view's; None: no fovea
 
     def __post_init__(self) -> None:
+        object.__setattr__(self, "fovea_zoom", check_fovea_zoom(self.fovea_zoom))
         checks = {
             "height_px": self.height_px >= 8,
             "width_px": self.width_px >= 8,
@@ -69,39 +153,57 @@ class CameraConfig:
         return self.width_px / self.height_px
 
     def intrinsics(self) -> np.ndarray:
-        """(fx, fy, cx, cy) in px at the output resolution (square pixels)."""
-        fy = 0.5 * self.height_px / math.tan(math.radians(self.vfov_deg) / 2)
-        return np.array([fy, fy, (self.width_px - 1) / 2, (self.height_px - 1) / 2])
+        """(fx, fy, cx, cy) in px of the wide view at the output resolution (square pixels)."""
+        return self.wide().intrinsics()
 
     def K(self) -> np.ndarray:
-        fx, fy, cx, cy = self.intrinsics()
-        return np.array([[fx, 0, cx], [0, fy, cy], [0, 0, 1.0]])
+        return self.wide().K()
+
+    def wide(self) -> Pinhole:
+        """The wide view: centred principal point, vertical FOV ``vfov_deg``."""
+        fy = 0.5 * self.height_px / math.tan(math.radians(self.vfov_deg) / 2)
+        h, w = self.height_px, self.width_px
+        return Pinhole(h, w, fy, fy, (w - 1) / 2, (h - 1) / 2, self.near_m, self.far_m)
+
+    def fovea(self) -> Pinhole | None:
+        """The fovea (None without ``fovea_zoom``): focal x Z, centred on the horizon point
+        straight ahead at the nominal pitch (see the module docstring)."""
+        if self.fovea_zoom is None:
+            return None
+        z, wide = self.fovea_zoom, self.wide()
+        f = z * wide.fy_px
+        cy = (self.height_px - 1) / 2 + f * math.tan(math.radians(self.pitch_deg))
+        return Pinhole(self.height_px, self.width_px, f, f, (self.width_px - 1) / 2, cy, self.near_m, self.far_m)
+
+    def view(self, name: str) -> Pinhole:
+        """'wide' or 'fovea' (refused when this camera has none)."""
+        if name == "wide":
+            return self.wide()
+        if name == "fovea" and self.fovea_zoom is not None:
+            return self.fovea()
+        raise ValueError(f"camera view {name!r}: this camera has {', '.join(self.view_names)}")
+
+    @property
+    def view_names(self) -> tuple[str, ...]:
+        """The views rendered every frame: ('wide',) or ('wide', 'fovea')."""
+        return VIEWS if self.fovea_zoom is not None else VIEWS[:1]
+
+    def fovea_from_wide(self, uv_wide: np.ndarray) -> np.ndarray:
+        """(N, 2) wide pixels -> (N, 2) fovea pixels of the same rays (the crop mapping)."""
+        wide, fov = self.wide(), self.fovea()
+        if fov is None:
+            raise ValueError("fovea_from_wide: this camera has no fovea (fovea_zoom is None)")
+        uv = np.atleast_2d(np.asarray(uv_wide, dtype=np.float64))
+        z = self.fovea_zoom
+        return np.stack([z * (uv[:, 0] - wide.cx_px) + fov.cx_px, z * (uv[:, 1] - wide.cy_px) + fov.cy_px], 1)
 
     def projection_matrix_gl(self, scale: int = 1) -> list[float]:
-        """OpenGL projection matrix (column-major, 16 floats) for PyBullet.
-
-        ``scale`` is the render resolution over the output resolution. TinyRenderer
-        samples each pixel at its corner; the half-pixel offsets in the third column
-        move the samples to the pixel centres, so the intrinsics above are exact
-        (checked in ``tests/test_camera.py``).
-        """
-        f = 1.0 / math.tan(math.radians(self.vfov_deg) / 2)
-        n, fa = self.near_m, self.far_m
-        w_px, h_px = self.width_px * scale, self.height_px * scale
-        P = np.array(
-            [
-                [f / self.aspect, 0, 1.0 / w_px, 0],
-                [0, f, 1.0 / h_px, 0],
-                [0, 0, (fa + n) / (n - fa), 2 * fa * n / (n - fa)],
-                [0, 0, -1, 0],
-            ]
-        )
-        return P.T.reshape(-1).tolist()
+        """The wide view's OpenGL projection matrix (see ``Pinhole.projection_matrix_gl``)."""
+        return self.wide().projection_matrix_gl(scale)
 
     def linear_depth(self, depth_buffer: np.ndarray) -> np.ndarray:
         """Depth Z along the optical axis [m] from PyBullet's non-linear depth buffer."""
-        n, fa = self.near_m, self.far_m
-        return (fa * n / (fa - (fa - n) * depth_buffer)).astype(np.float32)
+        return self.wide().linear_depth(depth_buffer)
 
 
 def rotation_xyz_deg(roll_deg: float, pitch_deg: float, yaw_deg: float) -> np.ndarray:
@@ -132,10 +234,3 @@ def cam_T_ego(cfg: CameraConfig, jitter_rpy_deg: tuple[float, float, float] = (0
 def view_matrix_gl(cam_T_world: np.ndarray) -> list[float]:
     """OpenGL view matrix (column-major, 16 floats) from an OpenCV ``cam_T_world``."""
     return (GL_FROM_CV @ cam_T_world).T.reshape(-1).tolist()
-
-
-def pixel_rays(cfg: CameraConfig) -> np.ndarray:
-    """(H, W, 3) camera-frame rays with z = 1 through every pixel centre."""
-    fx, fy, cx, cy = cfg.intrinsics()
-    v, u = np.mgrid[0 : cfg.height_px, 0 : cfg.width_px].astype(np.float64)
-    return np.stack([(u - cx) / fx, (v - cy) / fy, np.ones_like(u)], axis=-1)

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -20,6 +21,9 @@ from sim.stepping import capture_pose, pair_ground_truth, step_traffic, substeps
 from sim.textures import TextureStyle
 from sim.traffic import ActuatorConfig, EgoVehicle, ScriptedVehicle, TrafficVehicle, build_road
 from sim.vehicles import EGO_SIZE_M, VehicleSpec, footprint_corners, footprints_overlap, sample_spec
+
+if TYPE_CHECKING:  # the world imports PyBullet, which a run without a camera never needs
+    from sim.world import Render
 
 STANDSTILL_MPS = 0.01  # [m/s]
 POST_COLLISION_S = 1.0  # a run ends this long after the first contact [s] (Euro NCAP)
@@ -72,8 +76,9 @@ class _Actor:
 
 @dataclass
 class Frame:
-    """A captured frame: image (H, W, 3) uint8, exact depth and instances, and the poses
-    (world x [m], y [m], heading [rad]) of every actor at capture time."""
+    """A captured frame: the wide view's image (H, W, 3) uint8, exact depth and instances,
+    the fovea's render (``sim.world.Render``, same pose) when the camera has one, and the
+    poses (world x [m], y [m], heading [rad]) of every actor at capture time."""
 
     t_s: float
     image: np.ndarray | None
@@ -81,6 +86,15 @@ class Frame:
     poses: dict[int, tuple[float, float, float]] = field(default_factory=dict)
     depth_m: np.ndarray | None = None
     instance: np.ndarray | None = None
+    fovea: Render | None = None
+
+    def view(self, name: str) -> tuple[np.ndarray | None, np.ndarray | None, np.ndarray | None]:
+        """(image, depth_m, instance) of view 'wide' or 'fovea' (Nones where not rendered)."""
+        if name == "wide":
+            return self.image, self.depth_m, self.instance
+        if self.fovea is None:
+            return None, None, None
+        return self.fovea.rgb, self.fovea.depth_m, self.fovea.instance
 
 
 class ScenarioSim:
@@ -242,13 +256,17 @@ class ScenarioSim:
         for inst, pose in poses.items():
             self.world.set_vehicle_pose(inst, *pose)
         r = self.world.render(cam_T_world)
-        return Frame(self.t_s, r.rgb, cam_T_world, poses, r.depth_m, r.instance)
+        fovea = self.camera.fovea()
+        f = self.world.render(cam_T_world, pinhole=fovea) if fovea is not None else None
+        return Frame(self.t_s, r.rgb, cam_T_world, poses, r.depth_m, r.instance, f)
 
-    def ground_truth(self, prev: Frame, latest: Frame) -> GroundTruth:
+    def ground_truth(self, prev: Frame, latest: Frame, view: str = "wide") -> GroundTruth:
+        """Exact per-pixel ground truth of ``latest`` against ``prev`` in view 'wide' or 'fovea'."""
+        _, depth_m, instance = latest.view(view)
         return pair_ground_truth(
-            self.camera,
-            latest.depth_m,
-            latest.instance,
+            self.camera.view(view),
+            depth_m,
+            instance,
             latest.cam_T_world,
             prev.cam_T_world,
             latest.poses,

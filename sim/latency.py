@@ -16,14 +16,31 @@ Latency modes (``parse_latency``):
     ``measured``      L = the wall-clock time of the job's own call on this machine,
                       frame by frame (not reproducible: it says so in the outputs);
     ``fixed:MS``      L = MS milliseconds (deterministic);
-    ``profile:NAME``  L = a + b * K milliseconds with K thresholds, from a named device
-                      profile (``named_profiles()``, listed by ``bittc profiles``; deterministic);
+    ``profile:NAME``  L from a named device profile's cost model of the job's work
+                      (``JobWork``: feature extractions, views, thresholds per view, for the
+                      estimator that ran; ``named_profiles()``, listed by ``bittc profiles``;
+                      deterministic);
     ``profile:FILE``  the same from a profile file made by ``bittc profile --out FILE``
                       (a path: it ends in .yaml / .yml or holds a /; ``sim.profile_file``).
 
 Named profiles: the hand-written ones of ``latency_profiles.yaml`` (assumed or scaled
 devices) and the measured files of ``device_profiles/`` (each made by ``bittc profile``,
 named by its file name).
+
+The cost model of a profile (``CostTerms``, one set per estimator family: the network
+``bittc`` and the ``flow`` baseline), in milliseconds::
+
+    L = job_ms + views * view_ms + thresholds * threshold_ms + extractions * extract_ms
+
+``thresholds`` counts the thresholds evaluated over all views (K per view when every
+fence runs in every view).
+``extractions`` counts every frame of every view that went through the feature
+extractor in the job: one per view in a steady stream, two per view after a skip (the
+older frame of the pair was never extracted), none for an estimator without a feature
+cache. ``view_ms`` is the per-view work that does not grow with K (the network's
+reference context, the flow field); ``threshold_ms`` the work of one threshold in one
+view, the controller's region pass included; ``job_ms`` the controller's fixed work.
+A controller without an estimator (the oracle) costs nothing under a profile.
 """
 
 from __future__ import annotations
@@ -48,45 +65,102 @@ class LatencyError(ConfigError):
     """A malformed latency mode, an unknown profile, or a latency that is not a time."""
 
 
+COST_FAMILIES = ("bittc", "flow")  # estimator families a profile prices
+COST_TERMS = ("extract_ms", "view_ms", "threshold_ms", "job_ms")
+
+
+@dataclass(frozen=True)
+class JobWork:
+    """What one job computed, as a device profile prices it (see the module docstring)."""
+
+    estimator: str | None  # a COST_FAMILIES member, or None (no estimator: the oracle, none)
+    views: int = 1  # camera views the estimator ran on (wide, fovea)
+    thresholds: int = 0  # thresholds evaluated, summed over the views
+    extractions: int = 0  # frames x views through the feature extractor
+
+
+@dataclass(frozen=True)
+class CostTerms:
+    """One estimator family's cost terms [ms] on one device."""
+
+    extract_ms: float = 0.0  # [ms] per feature extraction (one frame, one view)
+    view_ms: float = 0.0  # [ms] per view per job, independent of K
+    threshold_ms: float = 0.0  # [ms] per threshold per view
+    job_ms: float = 0.0  # [ms] per job
+
+    def latency_ms(self, work: JobWork) -> float:
+        return (
+            self.job_ms
+            + work.views * self.view_ms
+            + work.thresholds * self.threshold_ms
+            + work.extractions * self.extract_ms
+        )
+
+
 @dataclass(frozen=True)
 class DeviceProfile:
-    """L = a_ms + b_ms * K [ms] for K thresholds on one device (continuous mode: ``continuous_ms``)."""
+    """Cost terms per estimator family on one device (continuous mode: ``continuous_ms``)."""
 
     name: str
-    a_ms: float  # [ms] per frame: feature extraction and overhead
-    b_ms: float  # [ms] per threshold
+    costs: dict  # family -> CostTerms
     source: str  # where the numbers come from
     measured: bool  # True when measured on the device, False when scaled or assumed
-    continuous_ms: float | None = None  # [ms] one continuous-TTC call, where known
+    continuous_ms: float | None = None  # [ms] one continuous-TTC call of the network, where known
 
-    def latency_ms(self, num_alphas: int) -> float:
-        return self.a_ms + self.b_ms * num_alphas
+    def latency_ms(self, work: JobWork) -> float:
+        if work.estimator is None:
+            return 0.0
+        if work.estimator not in self.costs:
+            raise LatencyError(
+                f"profile {self.name!r} prices {', '.join(sorted(self.costs))}, not the {work.estimator!r} estimator"
+            )
+        return self.costs[work.estimator].latency_ms(work)
+
+    def stream_ms(self, family: str, num_alphas: int, views: int = 1) -> float:
+        """[ms] one steady-stream job (one extraction per view) with K thresholds."""
+        return self.latency_ms(JobWork(family, views, views * num_alphas, views if family == "bittc" else 0))
 
 
-_PROFILE_KEYS = {"a_ms", "b_ms", "source", "measured", "continuous_ms"}
+_PROFILE_KEYS = {"source", "measured", "continuous_ms", *COST_FAMILIES}
+
+
+def parse_costs(where: str, raw: dict) -> dict:
+    """{family: {term: ms}} of a profile -> family -> CostTerms; refused by name when a family
+    or term is unknown, a term is missing or a number is negative or not finite."""
+    out = {}
+    for fam in COST_FAMILIES:
+        if fam not in raw:
+            continue
+        terms = raw[fam]
+        if not isinstance(terms, dict) or set(terms) != set(COST_TERMS):
+            raise LatencyError(f"{where}: {fam} needs exactly the cost terms {list(COST_TERMS)} [ms], got {terms!r}")
+        for key, v in terms.items():
+            if not (isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) and v >= 0):
+                raise LatencyError(f"{where}: {fam}.{key} = {v!r} must be a finite number >= 0")
+        out[fam] = CostTerms(**{k: float(v) for k, v in terms.items()})
+    if not out:
+        raise LatencyError(f"{where}: needs the cost terms of at least one of {list(COST_FAMILIES)}")
+    return out
 
 
 def load_profiles(path: Path = PROFILES_FILE) -> dict[str, DeviceProfile]:
-    """name -> profile from a YAML mapping ``{name: {a_ms, b_ms, source, measured[, continuous_ms]}}``."""
+    """name -> profile from a YAML mapping ``{name: {bittc: {terms}, flow: {terms}, source,
+    measured[, continuous_ms]}}``."""
     raw = yaml.safe_load(path.read_text())
     if not isinstance(raw, dict):
         raise LatencyError(f"{path}: expected a mapping of profile names")
     out = {}
     for name, d in raw.items():
-        if not isinstance(d, dict) or set(d) - _PROFILE_KEYS or not {"a_ms", "b_ms", "source", "measured"} <= set(d):
+        if not isinstance(d, dict) or set(d) - _PROFILE_KEYS or not {"source", "measured"} <= set(d):
             raise LatencyError(
-                f"{path}: profile {name!r} needs exactly the keys {sorted(_PROFILE_KEYS)} "
-                f"(continuous_ms optional), got {d!r}"
+                f"{path}: profile {name!r} takes the keys {sorted(_PROFILE_KEYS)} (source and measured required), "
+                f"got {d!r}"
             )
-        for key in ("a_ms", "b_ms", "continuous_ms"):
-            v = d.get(key)
-            if key in d and not (
-                isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) and v >= 0
-            ):
-                raise LatencyError(f"{path}: profile {name!r}: {key} = {v!r} must be a finite number >= 0")
-        out[str(name)] = DeviceProfile(
-            str(name), float(d["a_ms"]), float(d["b_ms"]), str(d["source"]), bool(d["measured"]), d.get("continuous_ms")
-        )
+        cont = d.get("continuous_ms")
+        if cont is not None and not (isinstance(cont, (int, float)) and math.isfinite(cont) and cont >= 0):
+            raise LatencyError(f"{path}: profile {name!r}: continuous_ms = {cont!r} must be a finite number >= 0")
+        costs = parse_costs(f"{path}: profile {name!r}", {k: v for k, v in d.items() if k in COST_FAMILIES})
+        out[str(name)] = DeviceProfile(str(name), costs, str(d["source"]), bool(d["measured"]), cont)
     return out
 
 
@@ -127,14 +201,14 @@ class LatencyMode:
             return f"profile:{self.profile.name}"
         return "measured"
 
-    def latency_s(self, compute_s: float, num_alphas: int) -> float:
-        """L [s] of one job that took ``compute_s`` of wall-clock time with K thresholds."""
+    def latency_s(self, compute_s: float, work: JobWork) -> float:
+        """L [s] of one job that took ``compute_s`` of wall-clock time and did ``work``."""
         if self.kind == "measured":
             L = compute_s
         elif self.kind == "fixed":
             L = self.fixed_ms * 1e-3
         else:
-            L = self.profile.latency_ms(num_alphas) * 1e-3
+            L = self.profile.latency_ms(work) * 1e-3
         return check_latency_s(L)
 
 
@@ -202,6 +276,29 @@ class Job:
     def wait_s(self) -> float:
         """[s] the frame waited for the busy estimator."""
         return self.start_s - self.capture_s
+
+
+class FeatureCacheModel:
+    """The estimator's per-view frame cache as the loop counts it for a profile: the last
+    ``capacity`` frames used, least recently used evicted (``bittc_core.estimator.streaming``)."""
+
+    def __init__(self, capacity: int) -> None:
+        self.capacity = int(capacity)
+        self._frames: list[int] = []
+
+    def extractions(self, frames: tuple[int, ...]) -> int:
+        """Use ``frames`` in this order (the older frame of the pair first); -> how many were not cached."""
+        if self.capacity <= 0:
+            return 0
+        n = 0
+        for f in frames:
+            if f in self._frames:
+                self._frames.remove(f)
+            else:
+                n += 1
+            self._frames.append(f)
+            del self._frames[: -self.capacity]
+        return n
 
 
 class CommandQueue:

@@ -10,7 +10,13 @@ streaming schedule of :mod:`sim.latency`: a job on frame k starts at t_start, pa
 k with frame k - stride, and its command takes effect at t_start + L (rounded up to the
 next traffic step); the actuator's delay follows. Commands are applied in the order they
 take effect (``sim.latency.CommandQueue``). The run ends as :meth:`ScenarioSim.done`
-says, checked at every frame boundary.
+says, checked at every frame boundary. With a fovea (``camera.fovea_zoom``) every frame
+is captured in both views and a job's observation carries both pairs.
+
+Frame status: ``processed`` (a job ran on it), ``skipped`` (captured while the estimator
+was busy, and a newer frame was taken), ``unpaired`` (captured before the first frame
+that has a partner ``frame_stride`` frames back: nothing was busy), ``unused`` (the run
+ended first). ``frames_skipped`` counts only the skipped ones.
 
 Usage (what ``drive`` does)::
 
@@ -35,7 +41,7 @@ from controllers.base import BrakeCommand, Calibration, Controller, Observation
 from sim.episode import Frame, ScenarioSim, StepTruth
 from sim.fence_lag import FenceLagMeter
 from sim.ground_truth import GroundTruth
-from sim.latency import TIME_EPS_S, CommandQueue, Job, LatencyMode, next_job
+from sim.latency import TIME_EPS_S, CommandQueue, FeatureCacheModel, Job, JobWork, LatencyMode, next_job
 from sim.vehicles import EGO_SIZE_M
 
 cv2.setNumThreads(1)  # OpenCV's own pool would contend with the estimator's torch threads
@@ -51,11 +57,12 @@ class FrameRecord:
     ego_accel_mps2: float
     truth: StepTruth  # ground truth at capture (never shown to a deployable policy)
     active: BrakeCommand  # the command in effect at capture
-    status: str = "pending"  # processed | skipped (a newer frame was taken) | unused (run ended)
+    status: str = "pending"  # processed | skipped | unpaired | unused (see the module docstring)
     latency_s: float | None = None  # [s] estimator latency of its job
     wait_s: float | None = None  # [s] from capture to the start of its job
     decided: BrakeCommand | None = None  # its job's command
-    fence_cover: dict = field(default_factory=dict)  # threshold '<s>' -> share of the critical actor inside
+    work: JobWork | None = None  # what its job computed (what a profile charges)
+    fence_cover: dict = field(default_factory=dict)  # view -> threshold '<s>' -> share of the critical actor inside
 
 
 class ClosedLoop:
@@ -64,8 +71,12 @@ class ClosedLoop:
     Args:
         sim: the scenario run (rendering when ``pairs`` or a capture hook needs frames).
         latency: how each job's latency is charged.
-        num_alphas: thresholds per job (what a device profile charges).
+        num_alphas: thresholds per view per job (what a device profile charges, times ``views``).
         pairs: jobs need an image pair: the first job is on frame ``frame_stride``.
+        estimator: the estimator family a profile prices (``sim.latency.COST_FAMILIES``), None for none.
+        views: camera views the estimator runs on per job.
+        cached_frames: frames the estimator's feature cache holds per view (0: no cache).
+        ``drive`` takes the last four from the controller.
         frame_stride: the pair is (frame k - stride, frame k).
         on_capture: called with (record, frame) after every capture (videos).
         lag_meter: measures the fence lag of the critical actor from each job's geofences.
@@ -81,6 +92,9 @@ class ClosedLoop:
         frame_stride: int = 1,
         on_capture: Callable[[FrameRecord, Frame], None] | None = None,
         lag_meter: FenceLagMeter | None = None,
+        estimator: str | None = None,
+        views: int = 1,
+        cached_frames: int = 0,
     ) -> None:
         if not isinstance(frame_stride, int) or frame_stride < 1:
             raise ValueError(f"frame_stride = {frame_stride!r}: must be an integer >= 1")
@@ -91,6 +105,8 @@ class ClosedLoop:
         self.stride = frame_stride
         self.on_capture = on_capture
         self.lag_meter = lag_meter
+        self.estimator, self.views, self.cached_frames = estimator, int(views), int(cached_frames)
+        self.job_thresholds = self.num_alphas * self.views  # thresholds per job over all views
         self.frame_dt_s = sim.camera.dt_s
         self.calibration = Calibration.from_camera(sim.camera, EGO_SIZE_M)
         self.timing: dict[str, float] = defaultdict(float)  # [s] wall time per phase
@@ -108,14 +124,16 @@ class ClosedLoop:
         self.first_warning: tuple[float, float | None] | None = None  # (t [s], critical TTC [s])
         self.first_brake: tuple[float, float | None] | None = None
         self.brake_integral = 0.0  # [m/s] integral of the commanded deceleration over time
-        self._capture()
+        self._cache = FeatureCacheModel(self.cached_frames)
         self._first_frame = self.stride if self.pairs else 0
+        self._capture()
         return self._schedule(-1, 0.0)
 
     def observation(self, job: Job) -> Observation:
         rec = self.records[job.frame]
         latest = self._frames.get(job.frame)
         prev = self._frames.get(job.frame - self.stride) if self.pairs else None
+        fovea = (latest.fovea, prev.fovea if prev is not None else None) if latest is not None else (None, None)
         return Observation(
             rec.t_s,
             rec.ego_speed_mps,
@@ -123,41 +141,55 @@ class ClosedLoop:
             prev.image if prev is not None else None,
             self.stride * self.frame_dt_s,
             self.calibration,
+            fovea[0].rgb if fovea[0] is not None else None,
+            fovea[1].rgb if fovea[1] is not None else None,
         )
 
     def truth_at(self, job: Job) -> StepTruth:
         """Ground truth at the job's capture (for oracles, ``info`` and traces only)."""
         return self.records[job.frame].truth
 
-    def ground_truth(self, frame: int) -> GroundTruth | None:
-        """Per-pixel ground truth of ``frame`` against the frame before (None without images)."""
-        if frame not in self._gt:
+    def ground_truth(self, frame: int, view: str = "wide") -> GroundTruth | None:
+        """Per-pixel ground truth of ``frame`` against the frame before in view 'wide' or
+        'fovea' (None without images, or without that view)."""
+        key = (frame, view)
+        if key not in self._gt:
             prev, latest = self._frames.get(frame - 1), self._frames.get(frame)
-            if prev is None or latest is None or latest.depth_m is None:
+            if prev is None or latest is None or latest.view(view)[1] is None:
                 return None
             t0 = time.perf_counter()
-            self._gt[frame] = self.sim.ground_truth(prev, latest)
+            self._gt[key] = self.sim.ground_truth(prev, latest, view)
             self.timing["ground_truth_s"] += time.perf_counter() - t0
-        return self._gt[frame]
+        return self._gt[key]
 
     def submit(self, cmd: BrakeCommand, compute_s: float, who: str = "controller") -> Job | None:
         """The command decided in the current job, which took ``compute_s`` of wall time;
         -> the next job, or None when the run has ended."""
         cmd.check(who)
         job = self._job
-        L = self.latency.latency_s(compute_s, self.num_alphas)
+        work = self._work(job.frame)
+        L = self.latency.latency_s(compute_s, work)
         rec = self.records[job.frame]
-        rec.status, rec.latency_s, rec.wait_s, rec.decided = "processed", L, job.wait_s, cmd
+        rec.status, rec.latency_s, rec.wait_s, rec.decided, rec.work = "processed", L, job.wait_s, cmd, work
         self.queue.push(job.start_s + L, job.frame, cmd)
-        if self.lag_meter is not None and cmd.view is not None and rec.truth.critical is not None:
-            gt = self.ground_truth(job.frame)
-            if gt is not None:
-                rec.fence_cover = self.lag_meter.update(cmd.view, gt, rec.truth.critical)
+        views = cmd.views()
+        if self.lag_meter is not None and views and rec.truth.critical is not None:
+            gts = {name: self.ground_truth(job.frame, name) for name in views}
+            rec.fence_cover = self.lag_meter.update(views, gts, rec.truth.critical)
         return self._schedule(job.frame, job.start_s + L)
+
+    def _work(self, frame: int) -> JobWork:
+        """What the job on ``frame`` computes: its pair's frames not in the feature cache, per view."""
+        pair = (frame - self.stride, frame) if self.pairs else (frame,)
+        return JobWork(self.estimator, self.views, self.job_thresholds, self.views * self._cache.extractions(pair))
 
     def drive(self, controller: Controller) -> None:
         """Run to the end with ``controller`` deciding every job (reset with this car's calibration)."""
         controller.reset(self.calibration)
+        self.estimator = controller.estimator_kind
+        self.views = len(controller.views)
+        self.cached_frames = controller.cached_frames
+        self.job_thresholds = controller.job_thresholds
         job = self.reset()
         while job is not None:
             obs = self.observation(job)
@@ -178,7 +210,7 @@ class ClosedLoop:
         self._advance_to(start)
         for r in self.records[max(last_frame + 1, 0) : k]:
             if r.status == "pending":
-                r.status = "skipped"
+                r.status = "unpaired" if r.index < self._first_frame else "skipped"
         if self.end_reason is not None:
             for r in self.records:
                 if r.status == "pending":
@@ -232,7 +264,7 @@ class ClosedLoop:
         self._frames[rec.index] = frame
         for k in [k for k in self._frames if k < rec.index - self.stride - 1]:
             del self._frames[k]
-        for k in [k for k in self._gt if k < rec.index - self.stride - 1]:
+        for k in [k for k in self._gt if k[0] < rec.index - self.stride - 1]:
             del self._gt[k]
         if self.on_capture is not None:
             self.on_capture(rec, frame)

@@ -1,16 +1,16 @@
 """Device profile files: what ``bittc profile --out FILE`` writes and ``--latency
-profile:FILE`` reads. Pure Python (yaml), no network.
+profile:FILE`` reads. Pure Python (yaml, numpy), no network.
 
 A profile file is one YAML mapping::
 
     name: my-laptop              # a label (the file is named by its path in outputs)
-    a_ms: 7.8                    # [ms] L = a_ms + b_ms * K, least squares over timings_ms
-    b_ms: 2.4                    # [ms] per threshold
-    continuous_ms: 76.0          # [ms] one continuous-TTC call
+    bittc: {extract_ms: 4.1, view_ms: 1.9, threshold_ms: 2.3, job_ms: 0.4}   # cost terms [ms]
+    flow: {extract_ms: 0.0, view_ms: 2.1, threshold_ms: 0.1, job_ms: 0.3}     # (sim.latency)
+    continuous_ms: 76.0          # [ms] one continuous-TTC call of the network
     measured: true
     source: "..."                # how it was made, in words
-    timings_ms: {binary: {1: 11.0, 2: 13.0, ...}, continuous: 76.0}   # medians [ms] per K
-    fit: {rms_residual_ms: 0.4, max_residual_ms: 0.8}
+    timings_ms: [{estimator: bittc, views: 1, thresholds: 4, extractions: 1, median_ms: 15.2}, ...]
+    fit: {bittc: {rms_residual_ms: 0.4, max_residual_ms: 0.8}, flow: {...}}
     backend: torch               # torch | onnxruntime
     size_px: [96, 288]           # (H, W) of the timed frames
     threads: 2
@@ -19,8 +19,9 @@ A profile file is one YAML mapping::
     versions: {bittc-sim: ..., torch: ..., onnxruntime: ..., numpy: ...}
     date: "2026-12-02"
 
-Reading refuses unknown keys, a missing key, numbers that are negative or not finite,
-and a file without at least two K timings; the error names the file and the key.
+Reading refuses unknown keys, a missing key, cost terms that are missing, negative or
+not finite, and a file of the older ``a_ms`` / ``b_ms`` form; the error names the file
+and the key.
 """
 
 from __future__ import annotations
@@ -28,12 +29,13 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+import numpy as np
 import yaml
 
-from sim.latency import DeviceProfile, LatencyError
+from sim.latency import COST_FAMILIES, COST_TERMS, CostTerms, DeviceProfile, JobWork, LatencyError, parse_costs
 
-REQUIRED = ("name", "a_ms", "b_ms", "measured", "source", "timings_ms", "backend", "size_px", "threads", "date")
-OPTIONAL = ("continuous_ms", "fit", "weights", "machine", "versions")
+REQUIRED = ("name", "measured", "source", "timings_ms", "backend", "size_px", "threads", "date")
+OPTIONAL = ("continuous_ms", "fit", "weights", "machine", "versions", *COST_FAMILIES)
 
 
 def _number(path, key: str, v, *, positive: bool = False) -> float:
@@ -55,6 +57,11 @@ def read_profile_file(path: str | Path, name: str | None = None) -> DeviceProfil
         raise LatencyError(f"profile file {str(path)!r}: not valid YAML ({e})") from None
     if not isinstance(raw, dict):
         raise LatencyError(f"profile file {str(path)!r}: expected a mapping of keys, got {type(raw).__name__}")
+    if "a_ms" in raw or "b_ms" in raw:
+        raise LatencyError(
+            f"profile file {str(path)!r}: an older profile (L = a + b K, one estimator, one view); "
+            "make it again with `bittc profile`"
+        )
     unknown = sorted(set(map(str, raw)) - set(REQUIRED) - set(OPTIONAL))
     if unknown:
         raise LatencyError(
@@ -63,36 +70,42 @@ def read_profile_file(path: str | Path, name: str | None = None) -> DeviceProfil
     missing = [k for k in REQUIRED if k not in raw]
     if missing:
         raise LatencyError(f"profile file {str(path)!r}: missing key(s) {missing}")
-    a, b = _number(path, "a_ms", raw["a_ms"]), _number(path, "b_ms", raw["b_ms"])
+    costs = parse_costs(f"profile file {str(path)!r}", {k: raw[k] for k in COST_FAMILIES if k in raw})
     cont = None if raw.get("continuous_ms") is None else _number(path, "continuous_ms", raw["continuous_ms"])
     timings = raw["timings_ms"]
-    binary = timings.get("binary") if isinstance(timings, dict) else None
-    if not isinstance(binary, dict) or len(binary) < 2:
-        raise LatencyError(
-            f"profile file {str(path)!r}: timings_ms.binary needs the timings of at least two K values, got {binary!r}"
-        )
-    for k, t in binary.items():
-        if isinstance(k, bool) or not isinstance(k, int) or k < 1:
+    if not isinstance(timings, list) or not timings:
+        raise LatencyError(f"profile file {str(path)!r}: timings_ms must be a list of timed jobs, got {timings!r}")
+    for i, row in enumerate(timings):
+        if not isinstance(row, dict) or set(row) != {*_WORK_KEYS, "median_ms"}:
             raise LatencyError(
-                f"profile file {str(path)!r}: timings_ms.binary has K = {k!r}; K must be an integer >= 1"
+                f"profile file {str(path)!r}: timings_ms[{i}] needs exactly {[*_WORK_KEYS, 'median_ms']}, got {row!r}"
             )
-        _number(path, f"timings_ms.binary[{k}]", t, positive=True)
+        _number(path, f"timings_ms[{i}].median_ms", row["median_ms"], positive=True)
     if not isinstance(raw["measured"], bool):
         raise LatencyError(f"profile file {str(path)!r}: measured = {raw['measured']!r} must be true or false")
-    return DeviceProfile(name or str(path), a, b, str(raw["source"]), raw["measured"], cont)
+    return DeviceProfile(name or str(path), costs, str(raw["source"]), raw["measured"], cont)
 
 
-def fit_latency(binary_ms: dict[int, float]) -> tuple[float, float, float, float]:
-    """K -> median [ms] -> (a_ms, b_ms, rms residual, max |residual|) of L = a + b K (least
-    squares; a and b clipped at 0: a latency is never negative)."""
-    ks = sorted(binary_ms)
-    n = len(ks)
-    mk, mt = sum(ks) / n, sum(binary_ms[k] for k in ks) / n
-    var = sum((k - mk) ** 2 for k in ks)
-    b = max(sum((k - mk) * (binary_ms[k] - mt) for k in ks) / var, 0.0)
-    a = max(mt - b * mk, 0.0)
-    res = [binary_ms[k] - (a + b * k) for k in ks]
-    return a, b, math.sqrt(sum(r * r for r in res) / n), max(abs(r) for r in res)
+_WORK_KEYS = ("estimator", "views", "thresholds", "extractions")
+
+
+def fit_cost_terms(rows: list[tuple[JobWork, float]]) -> tuple[CostTerms, float, float]:
+    """(work, median [ms]) of one estimator family -> (its cost terms by non-negative least
+    squares, rms residual [ms], max |residual| [ms]). A term the rows cannot tell apart from
+    the others (no extraction varies, say) is fitted as 0."""
+    X = np.array([[w.extractions, w.views, w.thresholds, 1.0] for w, _ in rows], dtype=np.float64)
+    y = np.array([t for _, t in rows], dtype=np.float64)
+    active = [j for j in range(4) if X[:, j].any()]
+    coef = np.zeros(4)
+    while active:  # drop a negative term and refit (non-negative least squares on 4 terms)
+        sol, *_ = np.linalg.lstsq(X[:, active], y, rcond=None)
+        if (sol >= 0).all():
+            coef[active] = sol
+            break
+        active.pop(int(np.argmin(sol)))
+    res = y - X @ coef
+    terms = CostTerms(**{k: round(float(v), 4) for k, v in zip(COST_TERMS, coef)})
+    return terms, float(np.sqrt(np.mean(res**2))), float(np.abs(res).max())
 
 
 def write_profile_file(path: str | Path, doc: dict) -> None:

@@ -231,7 +231,7 @@ def render_clip(
         gts = []
         for j in range(1, clip_length):
             (_, c0, p0), (r1, c1, p1) = frames[j - 1], frames[j]
-            gts.append(pair_ground_truth(camera, r1.depth_m, r1.instance, c1, c0, p1, p0, camera.dt_s))
+            gts.append(pair_ground_truth(camera.wide(), r1.depth_m, r1.instance, c1, c0, p1, p0, camera.dt_s))
     finally:
         if owned:
             world.close()

@@ -54,6 +54,7 @@ SUMMARY_KEYS = (
     "sim_time_s",
     "num_alphas",
     "thresholds_s",
+    "fovea_zoom",
     "latency_mode",
     "latency_ms_mean",
     "latency_ms_p95",
@@ -63,8 +64,9 @@ SUMMARY_KEYS = (
     "frames_skipped",
 )
 #: per threshold [s]: the critical actor's exact camera-plane TTC when the fence first covered half of it,
-#: and the fence's lag (threshold minus that TTC); see sim.fence_lag
-LAG_KEYS = ("fence_cover_ttc_s", "fence_lag_s")
+#: the fence's lag (threshold minus that TTC; the earlier cover of the views), the lag in each view, and
+#: the persistent lag (from the first frame the fence holds to the end); see sim.fence_lag
+LAG_KEYS = ("fence_cover_ttc_s", "fence_lag_s", "fence_lag_wide_s", "fence_lag_fovea_s", "fence_lag_persistent_s")
 
 
 def _r(x: float | None, nd: int = 4) -> float | None:
@@ -96,7 +98,7 @@ def run_case(
     render = controller.needs_camera or video
     sim = ScenarioSim(case, camera, seed, render=render, actuator=actuator, textures=textures)
     writer = VideoWriter(out_dir / "camera.mp4", camera.fps_hz) if (video and out_dir is not None) else None
-    lag = FenceLagMeter() if controller.needs_camera else None
+    lag = lag_meter_for(controller)
     hook = None
     if writer is not None:
         scale = writer.scale_for(camera.width_px)
@@ -143,6 +145,13 @@ def run_case(
         sim.close()
 
 
+def lag_meter_for(controller: Controller) -> FenceLagMeter | None:
+    """A fence-lag meter counting inside as the controller does (its ``prob_inside``), for camera controllers."""
+    if not controller.needs_camera:
+        return None
+    return FenceLagMeter(getattr(getattr(controller, "cfg", None), "prob_inside", 0.5))
+
+
 def default_latency(controller: Controller) -> LatencyMode:
     """``measured`` for controllers that look at the camera, ``fixed:0`` otherwise."""
     return parse_latency("measured" if controller.needs_camera else "fixed:0")
@@ -184,6 +193,7 @@ def summarize(
         "sim_time_s": _r(sim.t_s),
         "num_alphas": controller.num_alphas,
         "thresholds_s": list(thresholds) if thresholds is not None else [],
+        "fovea_zoom": sim.camera.fovea_zoom,
         "latency_mode": str(latency),
         "latency_ms_mean": _r(float(lat_ms.mean()), 3) if lat_ms.size else None,
         "latency_ms_p95": _r(float(np.percentile(lat_ms, 95)), 3) if lat_ms.size else None,
@@ -195,6 +205,9 @@ def summarize(
     if lag is not None:
         summary["fence_cover_ttc_s"] = lag.cover_ttc()
         summary["fence_lag_s"] = lag.lag_s()
+        summary["fence_lag_wide_s"] = lag.lag_s("wide")
+        summary["fence_lag_fovea_s"] = lag.lag_s("fovea") if sim.camera.fovea_zoom is not None else None
+        summary["fence_lag_persistent_s"] = lag.persistent_lag_s()
     return summary
 
 
@@ -217,8 +230,10 @@ def _trace_rows(loop: ClosedLoop) -> list[dict]:
             "decided_warning": int(rec.decided.warning) if rec.decided else "",
             "decided_brake_mps2": f"{rec.decided.decel_mps2:.3f}" if rec.decided else "",
         }
-        for k, v in rec.fence_cover.items():
-            row[f"crit_inside_{k}s"] = f"{v:.3f}"
+        for view, shares in rec.fence_cover.items():
+            tag = "" if view == "wide" else f"{view}_"
+            for k, v in shares.items():
+                row[f"crit_inside_{tag}{k}s"] = f"{v:.3f}"
         if rec.decided is not None:
             for k, v in rec.decided.telemetry.items():
                 if k != "estimator_ms" or not loop.latency.deterministic:
@@ -229,18 +244,28 @@ def _trace_rows(loop: ClosedLoop) -> list[dict]:
     return rows
 
 
-def _video_frame(frame, rec, loop: ClosedLoop, scale: int) -> np.ndarray:
+def _view_image(frame, rec, loop: ClosedLoop, name: str, view) -> np.ndarray:
+    """One view's frame with the controller's fences over it, or the exact TTC where it has none."""
     from sim.video import geofence_overlay
 
-    img, active, truth = frame.image, rec.active, rec.truth
-    view = active.view
+    img = frame.view(name)[0]
     if view is not None:
-        img = geofence_overlay(img, view)
-    else:
-        gt = loop.ground_truth(rec.index)
-        if gt is not None:
-            img = ttc_overlay(img, gt.tau_s, gt.valid, gt.instance)
+        return geofence_overlay(img, view)
+    gt = loop.ground_truth(rec.index, name)
+    return ttc_overlay(img, gt.tau_s, gt.valid, gt.instance) if gt is not None else img
+
+
+def _video_frame(frame, rec, loop: ClosedLoop, scale: int) -> np.ndarray:
+    """The wide view (fences or exact TTC over it) scaled up, the fovea as an inset in its
+    lower right corner with its footprint outlined on the wide view, and the HUD."""
+    from sim.video import fovea_inset
+
+    active, truth = rec.active, rec.truth
+    img = _view_image(frame, rec, loop, "wide", active.view)
     img = cv2.resize(img, (img.shape[1] * scale, img.shape[0] * scale), interpolation=cv2.INTER_NEAREST)
+    if frame.fovea is not None:
+        inset = _view_image(frame, rec, loop, "fovea", active.fovea_view)
+        img = fovea_inset(img, inset, loop.sim.camera, scale)
     crit = truth.critical
     ttc = f"{crit.ttc_s:.2f} s" if crit and math.isfinite(crit.ttc_s) else "inf"
     gap = f"{crit.gap_m:.1f} m" if crit else "-"
@@ -255,11 +280,14 @@ def _video_frame(frame, rec, loop: ClosedLoop, scale: int) -> np.ndarray:
     )
     last = next((r for r in reversed(loop.records) if r.latency_s is not None), None)
     lat = f"{last.latency_s * 1e3:.0f} ms" if last is not None else "-"
+    fired = active.telemetry.get("fired_view") or "-"
     lines = [
         f"t {rec.t_s:5.2f} s   speed {rec.ego_speed_mps * 3.6:5.1f} km/h",
         f"gap {gap}   exact TTC {ttc}",
         f"{stage}  {active.decel_mps2:.1f} m/s2   latency {lat}",
     ]
+    if frame.fovea is not None:
+        lines.append(f"fired in view: {fired}")
     return hud(img, lines, active.warning or active.decel_mps2 > 0)
 
 

@@ -9,14 +9,18 @@ never applied. Per case and threshold tau_i (camera-plane TTC [s] from the lates
 
 * ``fence_lag_s``: tau_i minus the critical actor's exact camera-plane TTC at the first
   frame where fence i covers at least half of its pixels (``sim.fence_lag``); None when it
-  never does;
+  never does. With a fovea: the earlier cover of the two views, each view's own beside it
+  (``fence_lag_wide_s``, ``fence_lag_fovea_s``);
+* ``fence_lag_persistent_s``: the same from the first frame from which the fence covers
+  half of the actor in every later frame up to contact;
 * the share of the critical actor inside each fence against its exact TTC (binned in
   ``TAU_BINS_S``; the curve of ``plot_inside_share``) and, from it, ``curve_lag_s``:
   tau_i minus the TTC at which the mean share over the threat cases reaches one half
   (linear between bins). The first-cover lag rewards a fence that flickers on for a
   frame early; the curve's does not;
 * on benign cases, the in-path evidence the controller would have counted ("stray"): the
-  frames with an in-path region per fence and the longest run of consecutive frames.
+  frames with an in-path region per fence and the longest run of consecutive frames, in
+  either view (a frame counts when any view has a region).
 """
 
 from __future__ import annotations
@@ -49,9 +53,15 @@ class OpenLoopProbe(Controller):
         self.name = f"{inner.name}-open-loop"
         self.num_alphas = inner.num_alphas
         self.frame_stride = inner.frame_stride
+        self.estimator_kind, self.cached_frames = inner.estimator_kind, inner.cached_frames
+
+    @property
+    def job_thresholds(self) -> int:
+        return self.inner.job_thresholds
 
     def reset(self, calibration) -> None:
         self.inner.reset(calibration)
+        self.views = self.inner.views
         self.telemetry: list[dict] = []
         self.decided: list[BrakeCommand] = []
 
@@ -59,7 +69,7 @@ class OpenLoopProbe(Controller):
         cmd = self.inner.act(obs, None)
         self.telemetry.append(dict(cmd.telemetry))
         self.decided.append(cmd)
-        return BrakeCommand(view=cmd.view)  # the view feeds the fence-lag meter, the brake stays off
+        return BrakeCommand(view=cmd.view, fovea_view=cmd.fovea_view)  # the maps feed the fence-lag meter only
 
 
 @dataclass(frozen=True)
@@ -67,7 +77,10 @@ class CaseResult:
     name: str
     threat: bool
     ego_speed_kph: float
-    fence_lag_s: dict  # '<tau>' -> lag [s] or None
+    fence_lag_s: dict  # '<tau>' -> lag [s] or None (the earlier cover of the views)
+    fence_lag_wide_s: dict
+    fence_lag_fovea_s: dict | None  # None without a fovea
+    fence_lag_persistent_s: dict
     history: list  # (tau* [s], {'<tau>': share inside}) per measured frame
     stray_frames: dict  # '<tau>' -> frames with an in-path region (benign cases)
     stray_max_run: dict  # '<tau>' -> longest run of such consecutive frames
@@ -81,7 +94,7 @@ def evaluate_case(
     cfg = GeofenceConfig(thresholds_s=tuple(thresholds_s), frame_stride=frame_stride)
     probe = OpenLoopProbe(GeofenceController(estimator, cfg))
     sim = ScenarioSim(case, camera, seed, render=True)
-    lag = FenceLagMeter()
+    lag = FenceLagMeter(cfg.prob_inside)
     try:
         loop = ClosedLoop(
             sim,
@@ -97,7 +110,7 @@ def evaluate_case(
     keys = [f"{t:g}" for t in sorted(thresholds_s)]
     stray, runs = {}, {}
     for k in keys:
-        hits = [int(t.get(f"inpath_px_{k}s", 0)) > 0 for t in probe.telemetry]
+        hits = [any(int(t.get(f"inpath_px_{tag}{k}s", 0)) > 0 for tag in ("", "fovea_")) for t in probe.telemetry]
         stray[k] = sum(hits)
         best = cur = 0
         for h in hits:
@@ -105,7 +118,20 @@ def evaluate_case(
             best = max(best, cur)
         runs[k] = best
     warned = any(c.warning or c.decel_mps2 > 0 for c in probe.decided)
-    return CaseResult(case.name, case.threat, case.ego.speed_kph, lag.lag_s(), lag.history, stray, runs, warned)
+    fovea = lag.lag_s("fovea") if camera.fovea_zoom is not None else None
+    return CaseResult(
+        case.name,
+        case.threat,
+        case.ego.speed_kph,
+        lag.lag_s(),
+        lag.lag_s("wide"),
+        fovea,
+        lag.persistent_lag_s(),
+        lag.history,
+        stray,
+        runs,
+        warned,
+    )
 
 
 def _median(values) -> float | None:
@@ -154,6 +180,14 @@ def summarize(results: list[CaseResult], thresholds_s) -> dict:
         "curve_lag_s": {k: (round(float(k) - half[k], 4) if half[k] is not None else None) for k in keys},
         "fence_lag_s": {k: _median(r.fence_lag_s.get(k) for r in threats) for k in keys},
         "fence_lag_s_fast": {k: _median(r.fence_lag_s.get(k) for r in fast) for k in keys},
+        "fence_lag_wide_s": {k: _median(r.fence_lag_wide_s.get(k) for r in threats) for k in keys},
+        "fence_lag_fovea_s": (
+            {k: _median(r.fence_lag_fovea_s.get(k) for r in threats) for k in keys}
+            if any(r.fence_lag_fovea_s is not None for r in threats)
+            else None
+        ),
+        "fence_lag_persistent_s": {k: _median(r.fence_lag_persistent_s.get(k) for r in threats) for k in keys},
+        "fence_lag_persistent_s_fast": {k: _median(r.fence_lag_persistent_s.get(k) for r in fast) for k in keys},
         "fence_never_covered": {k: sum(r.fence_lag_s.get(k) is None for r in threats) for k in keys},
         "threat_cases": len(threats),
         "fast_cases": len(fast),
@@ -166,6 +200,9 @@ def summarize(results: list[CaseResult], thresholds_s) -> dict:
                 "threat": r.threat,
                 "ego_speed_kph": r.ego_speed_kph,
                 "fence_lag_s": r.fence_lag_s,
+                "fence_lag_wide_s": r.fence_lag_wide_s,
+                "fence_lag_fovea_s": r.fence_lag_fovea_s,
+                "fence_lag_persistent_s": r.fence_lag_persistent_s,
                 **(
                     {
                         "stray_frames": r.stray_frames,
@@ -198,6 +235,11 @@ def format_table(summary: dict) -> str:
 
     lines.append(row(f"median ({summary['threat_cases']} threats)", summary["fence_lag_s"]))
     lines.append(row(f"median, 60-80 km/h ({summary['fast_cases']})", summary["fence_lag_s_fast"]))
+    if summary.get("fence_lag_fovea_s") is not None:
+        lines.append(row("median, wide view alone", summary["fence_lag_wide_s"]))
+        lines.append(row("median, fovea alone", summary["fence_lag_fovea_s"]))
+    lines.append(row("median persistent lag", summary["fence_lag_persistent_s"]))
+    lines.append(row("persistent, 60-80 km/h", summary["fence_lag_persistent_s_fast"]))
     lines.append(f"{'never covered':<28}" + "".join(f"{summary['fence_never_covered'][k]:>11}" for k in keys))
     lines.append(row("lag of the mean-share curve", summary["curve_lag_s"]))
     lines.append(

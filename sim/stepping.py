@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from sim.camera import CameraConfig, cam_T_ego
+from sim.camera import CameraConfig, Pinhole, cam_T_ego
 from sim.ground_truth import GroundTruth, body_motions, camera_pose, compute_ground_truth
 
 SIM_DT_S = 0.01  # traffic integration step [s]
@@ -40,12 +40,19 @@ def capture_pose(camera: CameraConfig, rng: np.random.Generator, ego_pose: Pose)
     return camera_pose(cam_T_ego(camera, jitter), ego_pose)
 
 
-def pair_ground_truth(camera: CameraConfig, depth_m: np.ndarray, instance: np.ndarray, cam_T_world: np.ndarray,
-                      prev_cam_T_world: np.ndarray, poses: dict[int, Pose], prev_poses: dict[int, Pose],
-                      dt_s: float) -> GroundTruth:  # fmt: skip
-    """Exact ground truth of the latest frame (its depth, instances and pose) against the
-    previous one, ``dt_s`` [s] earlier; actors' motions from their poses in both frames."""
+def pair_ground_truth(
+    view: Pinhole,
+    depth_m: np.ndarray,
+    instance: np.ndarray,
+    cam_T_world: np.ndarray,
+    prev_cam_T_world: np.ndarray,
+    poses: dict[int, Pose],
+    prev_poses: dict[int, Pose],
+    dt_s: float,
+) -> GroundTruth:
+    """Exact ground truth of the latest frame seen through ``view`` (its depth, instances
+    and pose) against the previous one, ``dt_s`` [s] earlier; actors' motions from their
+    poses in both frames. Both views of a camera share its pose, so the wide view and the
+    fovea get their maps from this same code."""
     motions = body_motions(prev_poses, poses)
-    return compute_ground_truth(
-        depth_m, instance, camera.K(), cam_T_world, prev_cam_T_world, motions, dt_s, camera.far_m
-    )
+    return compute_ground_truth(depth_m, instance, view.K(), cam_T_world, prev_cam_T_world, motions, dt_s, view.far_m)

@@ -53,6 +53,33 @@ def geofence_overlay(image_rgb: np.ndarray, view, alpha: float = 0.45) -> np.nda
     return out
 
 
+def fovea_inset(wide_scaled: np.ndarray, fovea_rgb: np.ndarray, camera, scale: int) -> np.ndarray:
+    """The fovea's image at half the wide view's ``scale`` in the lower right corner of the
+    scaled wide image, framed in white, and the fovea's footprint (the wide pixels it
+    magnifies, ``camera.fovea_from_wide`` inverted) outlined on the wide view."""
+    out = np.ascontiguousarray(wide_scaled).copy()
+    wide, fov = camera.wide(), camera.fovea()
+    z = camera.fovea_zoom
+    # wide pixel of a fovea pixel: u = (u_f - cx_f) / Z + cx, at the fovea's corners (pixel edges)
+    u0 = (-0.5 - fov.cx_px) / z + wide.cx_px + 0.5
+    u1 = (fov.width_px - 0.5 - fov.cx_px) / z + wide.cx_px + 0.5
+    v0 = (-0.5 - fov.cy_px) / z + wide.cy_px + 0.5
+    v1 = (fov.height_px - 0.5 - fov.cy_px) / z + wide.cy_px + 0.5
+    box = [int(round(x * scale)) for x in (u0, v0, u1, v1)]
+    cv2.rectangle(out, (box[0], box[1]), (box[2] - 1, box[3] - 1), (255, 255, 255), 1)
+    s = max(1, scale // 2) if scale > 1 else 1
+    inset = cv2.resize(fovea_rgb, (fovea_rgb.shape[1] * s, fovea_rgb.shape[0] * s), interpolation=cv2.INTER_NEAREST)
+    h, w = inset.shape[:2]
+    H, W = out.shape[:2]
+    if h + 4 > H or w + 4 > W:
+        inset = cv2.resize(inset, (W // 2, H // 2), interpolation=cv2.INTER_AREA)
+        h, w = inset.shape[:2]
+    out[H - h - 4 : H, W - w - 4 : W] = 255
+    out[H - h - 2 : H - 2, W - w - 2 : W - 2] = inset
+    cv2.putText(out, f"fovea x{z:g}", (W - w, H - h - 8), cv2.FONT_HERSHEY_SIMPLEX, 0.45, (255, 255, 255), 1, cv2.LINE_AA)
+    return out
+
+
 # one-pixel offsets of the black outline drawn under the white HUD text: a thicker
 # stroke would not do, OpenCV widens each glyph's advance with the thickness, so a
 # thick outline drifts right of the thin text along the line

@@ -32,7 +32,7 @@ with c_output_suppressed():
 
 from sim import textures
 from sim.bodies import create_static_bodies, create_vehicle_bodies
-from sim.camera import CameraConfig, view_matrix_gl
+from sim.camera import CameraConfig, Pinhole, view_matrix_gl
 from sim.scenery import RoadConfig, Scenery, StaticShape, build_scenery
 from sim.vehicles import VehicleSpec
 
@@ -227,9 +227,6 @@ class World:
         self.client.resetBasePositionAndOrientation(self._wheel_uid[instance], [x_m, y_m, 0.0], _quat_z(heading_rad))
         self._vehicle_pose[instance] = (float(x_m), float(y_m), float(heading_rad))
 
-    def vehicle_pose(self, instance: int) -> tuple[float, float, float]:
-        return self._vehicle_pose[instance]
-
     @property
     def instance_lut(self) -> np.ndarray:
         """int32 array: PyBullet body uid -> instance id (-1 for uids of no body)."""
@@ -239,12 +236,14 @@ class World:
         return lut
 
     # ------------------------------------------------------------------ rendering
-    def render(self, cam_T_world: np.ndarray, with_rgb: bool = True) -> Render:
-        """Render the scene from an OpenCV camera pose ``cam_T_world`` (4x4); with
-        ``with_rgb=False`` the render's ``rgb`` is None (depth and instances only)."""
-        cam = self.camera
+    def render(self, cam_T_world: np.ndarray, with_rgb: bool = True, pinhole: Pinhole | None = None) -> Render:
+        """Render the scene from an OpenCV camera pose ``cam_T_world`` (4x4) through
+        ``pinhole`` (default: the camera's wide view; ``camera.fovea()`` for the fovea,
+        which shares the pose); with ``with_rgb=False`` the render's ``rgb`` is None (depth
+        and instances only)."""
+        cam = pinhole or self.camera.wide()
         view = view_matrix_gl(cam_T_world)
-        s = cam.supersample
+        s = self.camera.supersample
         flags = p.ER_SEGMENTATION_MASK_OBJECT_AND_LINKINDEX
         if s == 1:
             rgb, depth_buf, seg = self._raw(cam.width_px, cam.height_px, view, cam.projection_matrix_gl(1), flags)

@@ -172,3 +172,38 @@ def backend_kwargs(args, method: str = "bittc") -> dict:
 
     # the export is checked against the weights asked for (the shipped ones by default)
     return {"backend": "onnxruntime", "onnx": args.onnx, "weights": args.weights or str(DEFAULT_WEIGHTS)}
+
+
+#: the CLI's fovea when --fovea is not given (chosen by the closed-loop comparison in docs/closed_loop.md)
+DEFAULT_FOVEA = "off"
+
+
+def add_fovea_flag(parser, many: bool = False) -> None:
+    """``--fovea ZOOM|off`` (``many``: several, a sweep dimension)."""
+    what = "a second, magnified view of the same camera beside the wide one: focal x ZOOM, centred on the road ahead"
+    if many:
+        parser.add_argument(
+            "--fovea", nargs="+", default=[DEFAULT_FOVEA], metavar="ZOOM|off", help=f"{what}; one or more settings "
+            f"(default {DEFAULT_FOVEA})"
+        )
+    else:
+        parser.add_argument(
+            "--fovea", default=DEFAULT_FOVEA, metavar="ZOOM|off", help=f"{what}; off: the wide view alone "
+            f"(default {DEFAULT_FOVEA})"
+        )
+
+
+def parse_fovea(text) -> float | None:
+    """'off' -> None; a zoom -> float in [1, MAX_FOVEA_ZOOM]; anything else -> CliError naming it."""
+    from sim.camera import check_fovea_zoom
+
+    if text is None or str(text).strip().lower() == "off":
+        return None
+    try:
+        zoom = float(text)
+    except ValueError:
+        raise CliError(f"--fovea {text!r}: expected a zoom (e.g. 2 or 4) or off") from None
+    try:
+        return check_fovea_zoom(zoom)
+    except ValueError as e:
+        raise CliError(f"--fovea {text!r}: {e}") from None

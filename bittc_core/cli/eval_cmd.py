@@ -26,11 +26,13 @@ from bittc_core.cli.common import (
     TTA_MODES,
     add_backend_flags,
     add_device_flag,
+    add_fovea_flag,
     add_seed_flag,
     backend_kwargs,
     check_device,
     check_seed,
     flag_error,
+    parse_fovea,
 )
 from bittc_core.errors import CliError, ConfigError
 
@@ -56,6 +58,7 @@ def add_parser(sub) -> argparse.ArgumentParser:
         help="with --scenarios: the fences' thresholds [s] (default 0.9 1.6 2.4)",
     )
     p.add_argument("--plot", default=None, help="with --scenarios: also write this PNG of the inside-share curve")
+    add_fovea_flag(p)
     add_seed_flag(p, "with --scenarios: scenery seed")
     p.add_argument(
         "--frame-stride",
@@ -127,6 +130,7 @@ def _check(args) -> Path:
             raise CliError(f"--frame-stride {args.frame_stride}: must be in [1, 10]")
         if args.plot is not None and not args.plot.endswith(".png"):
             raise CliError(f"--plot {args.plot!r}: expected a .png file")
+        args.fovea_zoom = parse_fovea(args.fovea)
     default = (
         f"eval_{args.method}_scenarios_{Path(args.scenarios).stem}.json"
         if args.scenarios
@@ -256,7 +260,9 @@ def run_scenarios(args, out: Path) -> int:
     from tqdm import tqdm
 
     results = [
-        scenario_eval.evaluate_case(c, estimator, args.tau, CameraConfig(), args.seed, args.frame_stride)
+        scenario_eval.evaluate_case(
+            c, estimator, args.tau, CameraConfig(fovea_zoom=args.fovea_zoom), args.seed, args.frame_stride
+        )
         for c in tqdm(cases, desc="cases", unit="case", leave=False)
     ]
     summary = {
@@ -265,6 +271,7 @@ def run_scenarios(args, out: Path) -> int:
         "scenarios": args.scenarios,
         "seed": args.seed,
         "frame_stride": args.frame_stride,
+        "fovea_zoom": args.fovea_zoom,
         **scenario_eval.summarize(results, args.tau),
     }
     print(scenario_eval.format_table(summary))

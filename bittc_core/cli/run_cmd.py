@@ -7,7 +7,15 @@ import json
 from pathlib import Path
 
 import scenarios
-from bittc_core.cli.common import add_seed_flag, check_seed, parse_size, texture_style, writable_dir
+from bittc_core.cli.common import (
+    add_fovea_flag,
+    add_seed_flag,
+    check_seed,
+    parse_fovea,
+    parse_size,
+    texture_style,
+    writable_dir,
+)
 from bittc_core.cli.loop_flags import add_controller_flags, controller_from_args
 from bittc_core.errors import CliError
 from sim.camera import CameraConfig
@@ -40,6 +48,7 @@ def add_camera_flags(p: argparse.ArgumentParser) -> None:
         "--jitter-deg", type=float, default=None, help="std of per-frame pitch/yaw/roll jitter [deg] (default 0)"
     )
     p.add_argument("--supersample", type=int, default=None, help="anti-aliasing factor 1-4 (default 1)")
+    add_fovea_flag(p)
     p.add_argument(
         "--ground-texture",
         default="detailed",
@@ -74,6 +83,7 @@ def camera_from_args(args) -> CameraConfig:
         if not 1.0 <= args.fps <= 100.0:
             raise CliError(f"--fps {args.fps}: must be in [1, 100] Hz")
         kw["fps_hz"] = args.fps
+    kw["fovea_zoom"] = parse_fovea(args.fovea)
     try:
         return CameraConfig(**kw)
     except ValueError as e:

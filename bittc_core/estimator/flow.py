@@ -74,6 +74,10 @@ class FlowEstimator(Estimator):
         self._dis = cv2.DISOpticalFlow_create(DIS_PRESETS[config.preset])
         self._last: tuple[torch.Tensor, torch.Tensor, np.ndarray] | None = None  # pair -> eta
 
+    def fork(self) -> FlowEstimator:
+        """Another flow estimator with the same settings and nothing remembered (one per camera view)."""
+        return FlowEstimator(self.config)
+
     def flow(self, prev: torch.Tensor, latest: torch.Tensor) -> np.ndarray:
         """(H, W, 2) float32 flow (u, v) [px], previous -> latest, in the latest grid."""
         f = self._dis.calc(_to_gray_u8(latest), _to_gray_u8(prev), None)

@@ -46,6 +46,8 @@ def check_tta(tta: str) -> None:
 class StreamingNetEstimator(Estimator):
     """The network behind the estimator interface, with the streaming cache."""
 
+    cached_frames = CACHED_FRAMES  # frames whose features the cache holds
+
     def __init__(
         self, *, dt_s: float, tau_range_s: tuple[float, float], device: torch.device, tta: str = "none"
     ) -> None:
