@@ -32,11 +32,14 @@ def bundled() -> Catalog:
 SUITES: dict[str, str] = {
     "ncap": "every Euro NCAP car-to-car case: CCRs, CCRs-offset, CCRm, CCRb",
     "benign": "every benign scenario (no warning or brake expected)",
+    "near": "actors entering the ego's lane close ahead: a slow van merging 15-25 m ahead, close cut-ins, "
+    "a GVT at +-75 % overlap (what the wide view is for)",
     "all": "every bundled case",
     "demo": "five cases that show the trade-off: CCRs-50, CCRm-50, CCRb-12m-6mps2, benign-oncoming, "
     "benign-parked-truck",
 }
 NCAP_FAMILIES = ("CCRs", "CCRs-offset", "CCRm", "CCRb")
+NEAR_FAMILIES = ("near-merge", "near-cut-in", "near-gvt-offset")
 DEMO_CASES = ("CCRs-50", "CCRm-50", "CCRb-12m-6mps2", "benign-oncoming", "benign-parked-truck")
 
 
@@ -47,6 +50,8 @@ def resolve_suite(name: str) -> list[ScenarioCase]:
         return [c for f in NCAP_FAMILIES for c in cat.families[f]]
     if name == "benign":
         return [c for cases in cat.families.values() for c in cases if not c.threat]
+    if name == "near":
+        return [c for f in NEAR_FAMILIES for c in cat.families[f]]
     if name == "all":
         return list(cat.cases.values())
     if name == "demo":

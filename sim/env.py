@@ -9,9 +9,12 @@ The run goes through the closed-loop core (``sim.loop.ClosedLoop``), exactly as 
 ``bittc run``: a step is one job of the streaming schedule (``sim.latency``). The agent
 sees a frame pair; its action is the command decided on that pair and takes effect
 L after the job starts, where L comes from ``latency`` (``fixed:MS``, ``profile:NAME``, or
-``measured``: the compute time charged by a wrapper such as ``GeofenceObservation``; the
-agent's own thinking time is not measured). While busy, frames are skipped, so with
-L > the frame interval one step spans several frames.
+``measured``). In ``measured`` mode L is the compute charged by a wrapper such as
+``GeofenceObservation`` plus the agent's own time: the wall time from the moment
+``reset`` or ``step`` returned the observation to the moment the next ``step`` receives
+the action (for a policy under test its compute is latency too; an agent that does other
+work in between is charged for it). While busy, frames are skipped, so with L > the
+frame interval one step spans several frames.
 
 Observation Space (Dict):
     ============== ========================== ==========================================
@@ -24,7 +27,11 @@ Observation Space (Dict):
                                               pitch [deg], bumper ahead of the camera [m],
                                               ego width [m]
     ============== ========================== ==========================================
-    ``GeofenceObservation`` adds ``geofence`` (K, H, W) in [0, 1] and ``thresholds_s`` (K,).
+    With a fovea (``camera.fovea_zoom``), also ``fovea_image`` and ``fovea_image_prev``
+    (the same captures through the magnified view, same format) and ``fovea_calibration``
+    (its 8 numbers, as ``calibration``).
+    ``GeofenceObservation`` adds ``geofence`` (K, H, W) in [0, 1] and ``thresholds_s`` (K,),
+    and with a fovea ``fovea_geofence`` (K, H, W).
 
 Action Space: Box(0, 9, (1,)) — requested deceleration [m/s^2], applied through the
 actuator model (0.1 s delay, 30 m/s^3 jerk limit) once it takes effect. A NaN,
@@ -38,8 +45,8 @@ Episode End:
     threat resolved after braking (see :meth:`sim.episode.ScenarioSim.done`).
     truncated — the scenario's ``duration_s`` is reached.
 
-Ground truth (per-pixel eta/tau/flow/depth maps, per-actor gaps and TTCs, collision)
-travels in ``info``, never in the observation. The scenery seed is drawn from
+Ground truth (per-pixel eta/tau/flow/depth maps, per-actor gaps and TTCs, collision;
+``fovea_gt`` the fovea's maps) travels in ``info``, never in the observation. The scenery seed is drawn from
 ``self.np_random``, so ``reset(seed=s)`` fixes every pixel. ``textures`` (a
 ``sim.textures.TextureStyle``) picks the ground and vehicle texture styles (detailed
 ground and plain vehicles by default).
@@ -75,6 +82,12 @@ def _one_case(scenario: str):
     return cases[0]
 
 
+def _calibration_vector(c) -> np.ndarray:
+    """fx, fy, cx, cy [px], camera height [m], pitch [deg], bumper ahead of the camera [m], ego width [m]."""
+    v = [c.fx_px, c.fy_px, c.cx_px, c.cy_px, c.mount_height_m, c.pitch_deg, c.bumper_ahead_m, c.ego_width_m]
+    return np.array(v, np.float32)
+
+
 class ScenarioEnv(gym.Env):
     metadata = {"render_modes": ["rgb_array"], "render_fps": 10}
 
@@ -98,22 +111,30 @@ class ScenarioEnv(gym.Env):
         if not isinstance(frame_stride, int) or not 1 <= frame_stride <= 10:
             raise ValueError(f"frame_stride={frame_stride!r}: must be an integer in [1, 10]")
         self.frame_stride = frame_stride
-        self.num_alphas = 0  # thresholds per step, set by a wrapper that runs an estimator
+        # the work a profile charges per step, set by a wrapper that runs an estimator (sim.latency)
+        self.num_alphas = 0  # thresholds per view
+        self.views = 1
+        self.estimator_kind: str | None = None
+        self.cached_frames = 0
         self.render_mode = render_mode
         self.metadata = {**self.metadata, "render_fps": self.camera.fps_hz}
         h, w = self.camera.height_px, self.camera.width_px
-        self.observation_space = spaces.Dict(
-            {
-                "image": spaces.Box(0, 255, (h, w, 3), np.uint8),
-                "image_prev": spaces.Box(0, 255, (h, w, 3), np.uint8),
-                "ego_speed_mps": spaces.Box(0.0, MAX_SPEED_MPS, (1,), np.float32),
-                "calibration": spaces.Box(-CALIBRATION_BOUND, CALIBRATION_BOUND, (8,), np.float32),
-            }
-        )
+        image = spaces.Box(0, 255, (h, w, 3), np.uint8)
+        calibration = spaces.Box(-CALIBRATION_BOUND, CALIBRATION_BOUND, (8,), np.float32)
+        obs = {
+            "image": image,
+            "image_prev": image,
+            "ego_speed_mps": spaces.Box(0.0, MAX_SPEED_MPS, (1,), np.float32),
+            "calibration": calibration,
+        }
+        if self.camera.fovea_zoom is not None:
+            obs |= {"fovea_image": image, "fovea_image_prev": image, "fovea_calibration": calibration}
+        self.observation_space = spaces.Dict(obs)
         self.action_space = spaces.Box(0.0, MAX_DECEL_MPS2, (1,), np.float32)
         self._sim: ScenarioSim | None = None
         self._loop: ClosedLoop | None = None
         self._charged_s = 0.0
+        self._handed_out_s: float | None = None  # wall time [s] the current observation was returned
 
     def charge(self, compute_s: float) -> None:
         """Add ``compute_s`` [s] of compute to the current step's job (``measured`` latency)."""
@@ -121,14 +142,17 @@ class ScenarioEnv(gym.Env):
 
     def _obs(self) -> dict:
         o = self._loop.observation(self._job)
-        c = o.calibration
-        calib = [c.fx_px, c.fy_px, c.cx_px, c.cy_px, c.mount_height_m, c.pitch_deg, c.bumper_ahead_m, c.ego_width_m]
-        return {
+        out = {
             "image": o.image_latest.copy(),
             "image_prev": o.image_prev.copy(),
             "ego_speed_mps": np.array([min(o.ego_speed_mps, MAX_SPEED_MPS)], np.float32),
-            "calibration": np.array(calib, np.float32),
+            "calibration": _calibration_vector(o.calibration),
         }
+        if o.calibration.fovea is not None:
+            out["fovea_image"] = o.fovea_latest.copy()
+            out["fovea_image_prev"] = o.fovea_prev.copy()
+            out["fovea_calibration"] = _calibration_vector(o.calibration.fovea)
+        return out
 
     def _info(self) -> dict:
         """Ground truth at the observed frame's capture, as plain dicts and arrays:
@@ -143,6 +167,10 @@ class ScenarioEnv(gym.Env):
         gt = self._loop.ground_truth(self._job.frame)
         if gt is not None:
             info["gt"] = asdict(gt)
+        if self.camera.fovea_zoom is not None:
+            fgt = self._loop.ground_truth(self._job.frame, "fovea")
+            if fgt is not None:
+                info["fovea_gt"] = asdict(fgt)
         return info
 
     def reset(self, *, seed: int | None = None, options: dict | None = None):
@@ -157,11 +185,19 @@ class ScenarioEnv(gym.Env):
         world_seed = int(self.np_random.integers(2**31 - 1))
         self._sim = ScenarioSim(self.case, self.camera, world_seed, render=True, textures=self.textures)
         self._loop = ClosedLoop(
-            self._sim, self.latency, num_alphas=self.num_alphas, pairs=True, frame_stride=self.frame_stride
+            self._sim,
+            self.latency,
+            num_alphas=self.num_alphas,
+            pairs=True,
+            frame_stride=self.frame_stride,
+            estimator=self.estimator_kind,
+            views=self.views,
+            cached_frames=self.cached_frames,
         )
         self._charged_s = 0.0
         self._job = self._loop.reset()
         self._last = (self._obs(), self._info())
+        self._handed_out_s = time.perf_counter()
         return self._last
 
     def step(self, action):
@@ -177,7 +213,8 @@ class ScenarioEnv(gym.Env):
             )
         had_collision = self._sim.collision is not None
         brake0 = self._loop.brake_integral
-        job = self._loop.submit(BrakeCommand(float(a[0])), self._charged_s, who="agent")
+        agent_s = time.perf_counter() - self._handed_out_s if self._handed_out_s is not None else 0.0
+        job = self._loop.submit(BrakeCommand(float(a[0])), self._charged_s + agent_s, who="agent")
         self._charged_s = 0.0
         reward = -0.01 * (self._loop.brake_integral - brake0)
         if self._sim.collision is not None and not had_collision:
@@ -189,6 +226,7 @@ class ScenarioEnv(gym.Env):
         obs, info = self._last
         obs = {k: v.copy() for k, v in obs.items()}
         info = {**info, "end_reason": reason}
+        self._handed_out_s = time.perf_counter()
         return obs, float(reward), reason in ("collision", "standstill", "resolved"), reason == "duration", info
 
     def render(self):
@@ -225,31 +263,43 @@ class GeofenceObservation(gym.Wrapper):
         self.thresholds_s = np.asarray(thr, np.float32)
         self._thr_est = estimator_thresholds(self.estimator, thr, base.camera.dt_s, base.frame_stride)
         base.num_alphas = len(thr)
+        # one estimator per view, each its own frame cache (the model shared)
+        self._views = {"geofence": ("image_prev", "image", self.estimator)}
+        if base.camera.fovea_zoom is not None:
+            fork = getattr(self.estimator, "fork", None)
+            self._views["fovea_geofence"] = ("fovea_image_prev", "fovea_image", fork() if fork else self.estimator)
+        base.views = len(self._views)
+        base.estimator_kind = self.estimator.name if self.estimator.name in ("bittc", "flow") else None
+        base.cached_frames = int(getattr(self.estimator, "cached_frames", 0))
         k, h, w = len(thr), base.camera.height_px, base.camera.width_px
+        maps = spaces.Box(0.0, 1.0, (k, h, w), np.float32)
         self.observation_space = spaces.Dict(
             {
                 **env.observation_space.spaces,
-                "geofence": spaces.Box(0.0, 1.0, (k, h, w), np.float32),
+                **{key: maps for key in self._views},
                 "thresholds_s": spaces.Box(0.0, float(max(thr)), (k,), np.float32),
             }
         )
 
     def _augment(self, obs: dict) -> dict:
         t0 = time.perf_counter()
-        maps = self.estimator.geofence(obs["image_prev"], obs["image"], self._thr_est)
+        self._maps = {}
+        for key, (prev, latest, est) in self._views.items():
+            maps = est.geofence(obs[prev], obs[latest], self._thr_est)
+            self._maps[key] = np.clip(maps, 0.0, 1.0).astype(np.float32)
         self.env.unwrapped.charge(time.perf_counter() - t0)
-        self._maps = np.clip(maps, 0.0, 1.0).astype(np.float32)
-        return {**obs, "geofence": self._maps, "thresholds_s": self.thresholds_s.copy()}
+        return {**obs, **self._maps, "thresholds_s": self.thresholds_s.copy()}
 
     def reset(self, **kwargs):
-        if hasattr(self.estimator, "reset"):
-            self.estimator.reset()
+        for _, _, est in self._views.values():
+            if hasattr(est, "reset"):
+                est.reset()
         obs, info = self.env.reset(**kwargs)
         return self._augment(obs), info
 
     def step(self, action):
         obs, reward, terminated, truncated, info = self.env.step(action)
         if terminated or truncated:  # the run has ended: the last observation again
-            last = {**obs, "geofence": self._maps.copy(), "thresholds_s": self.thresholds_s.copy()}
+            last = {**obs, **{k: v.copy() for k, v in self._maps.items()}, "thresholds_s": self.thresholds_s.copy()}
             return last, reward, terminated, truncated, info
         return self._augment(obs), reward, terminated, truncated, info

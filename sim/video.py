@@ -76,7 +76,8 @@ def fovea_inset(wide_scaled: np.ndarray, fovea_rgb: np.ndarray, camera, scale: i
         h, w = inset.shape[:2]
     out[H - h - 4 : H, W - w - 4 : W] = 255
     out[H - h - 2 : H - 2, W - w - 2 : W - 2] = inset
-    cv2.putText(out, f"fovea x{z:g}", (W - w, H - h - 8), cv2.FONT_HERSHEY_SIMPLEX, 0.45, (255, 255, 255), 1, cv2.LINE_AA)
+    label = f"fovea x{z:g}"
+    cv2.putText(out, label, (W - w, H - h - 8), cv2.FONT_HERSHEY_SIMPLEX, 0.45, (255, 255, 255), 1, cv2.LINE_AA)
     return out
 
 

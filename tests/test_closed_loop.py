@@ -108,3 +108,55 @@ def test_bad_input_is_refused_by_name_and_nothing_is_written(tmp_path, capsys, e
     assert main(["run", "CCRs-30", "--out", str(out), *extra]) == 2
     assert needle in capsys.readouterr().err
     assert not out.exists()
+
+
+def test_a_fovea_run_is_byte_identical_and_reports_both_views(tmp_path):
+    case = scenarios.resolve("CCRs-30")[0]
+    ctrl = controllers.make("geofence", thresholds_s=(1.0, 2.0))
+    cam = CameraConfig(fovea_zoom=4.0)
+    outs = []
+    for i in range(2):
+        d = tmp_path / f"r{i}"
+        run_case(case, ctrl, cam, seed=3, out_dir=d, latency=parse_latency("fixed:20"))
+        outs.append(tuple((d / f).read_bytes() for f in ("trace.csv", "summary.json", "config.yaml")))
+    assert outs[0] == outs[1]
+    s = json.loads(outs[0][1])
+    assert s["fovea_zoom"] == 4.0 and s["frames_skipped"] == 0  # the frames before the first pair are not skips
+    assert set(s["fence_lag_wide_s"]) == set(s["fence_lag_fovea_s"]) == set(s["fence_lag_persistent_s"]) == {"1", "2"}
+    for k, lag in s["fence_lag_s"].items():  # the earlier cover of the two views
+        views = [v for v in (s["fence_lag_wide_s"][k], s["fence_lag_fovea_s"][k]) if v is not None]
+        assert lag == (min(views) if views else None)
+    header = outs[0][0].decode().splitlines()[0].split(",")
+    for col in ("inpath_px_1s", "inpath_px_fovea_1s", "fired_view", "crit_inside_2s", "crit_inside_fovea_2s"):
+        assert col in header
+    rows = outs[0][0].decode().splitlines()[1:]
+    assert {r.split(",")[header.index("frame")] for r in rows} <= {"processed", "unpaired", "unused"}
+
+
+def test_a_profile_charges_both_views_and_every_extraction(tmp_path):
+    from sim.latency import JobWork, named_profiles
+
+    prof = named_profiles()["this-cpu"]
+    s = run_case(
+        scenarios.resolve("CCRs-20")[0],
+        controllers.make("geofence", thresholds_s=(1.0, 2.0)),
+        CameraConfig(fovea_zoom=2.0),
+        seed=0,
+        out_dir=tmp_path / "r",
+        latency=parse_latency("profile:this-cpu"),
+    )
+    rows = (tmp_path / "r" / "trace.csv").read_text().splitlines()
+    col = rows[0].split(",").index("latency_ms")
+    lat = {float(r.split(",")[col]) for r in rows[1:] if r.split(",")[col]}
+    steady = prof.latency_ms(JobWork("bittc", 2, 4, 2))  # one new frame per view
+    first = prof.latency_ms(JobWork("bittc", 2, 4, 4))  # both frames of the first pairs, in both views
+    assert lat == {round(steady, 2), round(first, 2)} and s["frames_skipped"] == 0
+    # the flow baseline is priced by its own terms, not the network's
+    flow = run_case(
+        scenarios.resolve("CCRs-20")[0],
+        controllers.make("flow", thresholds_s=(1.0, 2.0)),
+        CameraConfig(),
+        seed=0,
+        latency=parse_latency("profile:this-cpu"),
+    )
+    assert flow["latency_ms_mean"] == pytest.approx(prof.latency_ms(JobWork("flow", 1, 2, 0)), abs=1e-3)

@@ -114,3 +114,30 @@ def test_texture_styles_change_only_what_they_name():
     smooth, _ = first_frame(TextureStyle(ground="smooth"))
     assert np.array_equal(smooth[vehicle], plain[vehicle])
     assert not np.array_equal(smooth[inst == 0], plain[inst == 0])
+
+
+def test_the_fovea_is_observed_and_its_truth_stays_in_info():
+    from sim.camera import CameraConfig
+
+    base = ScenarioEnv("CCRs-30", camera=CameraConfig(fovea_zoom=4.0), latency="profile:this-cpu")
+    env = GeofenceObservation(base, estimator="flow", num_alphas=2)
+    check_env(env, skip_render_check=True)
+    obs, info = env.reset(seed=1)
+    assert {"fovea_image", "fovea_image_prev", "fovea_calibration", "fovea_geofence"} <= set(obs)
+    assert obs["fovea_geofence"].shape == (2, 96, 288) and not np.array_equal(obs["fovea_image"], obs["image"])
+    assert obs["fovea_calibration"][0] == pytest.approx(4 * obs["calibration"][0])
+    assert "fovea_gt" in info and "fovea_gt" not in obs
+    env.close()
+
+
+def test_measured_mode_charges_the_agents_own_time():
+    """The agent thinks 250 ms after the first observation: its action takes effect then, frames 2 is skipped."""
+    import time
+
+    env = ScenarioEnv("CCRs-30", latency="measured")
+    _, info = env.reset(seed=0)
+    assert info["t_s"] == pytest.approx(0.1)
+    time.sleep(0.25)
+    _, _, _, _, info = env.step(np.zeros(1, np.float32))
+    env.close()
+    assert info["t_s"] == pytest.approx(0.3)

@@ -133,3 +133,73 @@ def test_a_frame_interval_outside_the_trained_range_is_refused():
     fast = Calibration.from_camera(CameraConfig(fps_hz=5.0), EGO_SIZE_M)  # 0.3 s at 0.2 s -> 0.15 s at 0.1 s
     with pytest.raises(ConfigError, match="frame interval 0.2 s"):
         ctrl.reset(fast)
+
+
+FOVEA_CAM = CameraConfig(fovea_zoom=4.0)
+FOVEA_CAL = Calibration.from_camera(FOVEA_CAM, EGO_SIZE_M)
+
+
+class ViewMapEstimator(MapEstimator):
+    """Hard geofences of ``tau`` for the wide view and ``tau_fovea`` for frames marked as the fovea's."""
+
+    def __init__(self):
+        super().__init__()
+        self.tau_fovea = np.full_like(self.tau, np.inf)
+
+    def geofence(self, prev, latest, thresholds_s):
+        tau = self.tau_fovea if latest[0, 0, 0] == 1 else self.tau
+        t = np.asarray(thresholds_s)[:, None, None]
+        return ((tau > 0) & (tau <= t)).astype(np.float32)
+
+
+def fovea_box(dist_m, tau_s, width_m=1.8, height_m=1.5):
+    """The road in the fovea's rows with a face standing ``dist_m`` ahead, in fovea pixels."""
+    cal = FOVEA_CAL.fovea
+    tau = np.repeat(ground_ttc_per_row(cal, SPEED)[:, None], cal.width_px, axis=1)
+    pin, T = FOVEA_CAM.fovea(), cam_T_ego(FOVEA_CAM)
+    x = FOVEA_CAM.mount_forward_m + dist_m
+    (u_a, v_bot), (u_b, v_top) = pin.project(
+        np.array([(T @ [x, width_m / 2, 0.0, 1.0])[:3], (T @ [x, -width_m / 2, height_m, 1.0])[:3]])
+    )
+    tau[int(v_top) : int(math.ceil(v_bot)), int(min(u_a, u_b)) : int(math.ceil(max(u_a, u_b)))] = tau_s
+    return tau
+
+
+def run_two_views(tau_wide, tau_fovea, jobs=3):
+    est = ViewMapEstimator()
+    est.tau, est.tau_fovea = tau_wide, tau_fovea
+    ctrl = GeofenceController(est, GeofenceConfig(thresholds_s=THR, frame_stride=1))
+    ctrl.reset(FOVEA_CAL)
+    wide = np.zeros((CAM.height_px, CAM.width_px, 3), np.uint8)
+    fov = wide.copy()
+    fov[0, 0, 0] = 1
+    return ctrl, [
+        ctrl.act(Observation(0.1 * k, SPEED, wide, wide, 0.1, FOVEA_CAL, fov, fov), None) for k in range(jobs)
+    ]
+
+
+def test_a_target_seen_only_by_the_fovea_fires_in_the_fovea():
+    # 35 m ahead at 50 km/h: a static face at tau 2.5 s, inside the 2.8 s fence, too small for the wide view
+    ctrl, cmds = run_two_views(road(), fovea_box(35.0, 2.5))
+    assert ctrl.views == ("wide", "fovea") and ctrl.job_thresholds == 2 * len(THR)
+    last = cmds[-1].telemetry
+    assert last["fired_view"] == "fovea" and last["fence_fired_s"] == 2.8 and cmds[-1].warning
+    assert last["inpath_px_fovea_2.8s"] > 100 and last["inpath_px_2.8s"] == 0
+    assert cmds[-1].fovea_view is not None and cmds[-1].fovea_view.counted.any()
+
+
+def test_the_most_urgent_view_decides():
+    # the wide view sees the face inside the 1.2 s fence, the fovea only inside 2.8 s: the wide view's stage wins
+    near = add_box(road(), 16.0, 0.0, 1.1)
+    _, cmds = run_two_views(near, fovea_box(35.0, 2.5))
+    assert cmds[-1].telemetry["fired_view"] == "wide" and cmds[-1].telemetry["fence_fired_s"] == 1.2
+    assert cmds[-1].decel_mps2 > 0
+
+
+def test_fences_below_the_fovea_bound_run_on_the_wide_view_only():
+    est = ViewMapEstimator()
+    ctrl = GeofenceController(est, GeofenceConfig(thresholds_s=THR, frame_stride=1, fovea_fences_from_s=1.5))
+    ctrl.reset(FOVEA_CAL)
+    assert ctrl.job_thresholds == 4 + 2  # the 1.8 and 2.8 s fences in the fovea too
+    with pytest.raises(ConfigError, match="fovea_fences_from_s"):
+        GeofenceController(est, GeofenceConfig(thresholds_s=THR, fovea_fences_from_s=3.0)).reset(FOVEA_CAL)

@@ -4,7 +4,7 @@ import math
 
 import pytest
 
-from sim.latency import CommandQueue, Job, LatencyError, next_job, parse_latency
+from sim.latency import CommandQueue, FeatureCacheModel, Job, JobWork, LatencyError, next_job, parse_latency
 
 DT = 0.1  # [s]
 
@@ -57,13 +57,35 @@ def test_queue_refuses_a_nan_effect_time_instead_of_blocking():
 
 
 def test_latency_modes():
-    assert parse_latency("fixed:50").latency_s(1.0, 4) == pytest.approx(0.05)
-    assert parse_latency("measured").latency_s(0.0123, 4) == pytest.approx(0.0123)
+    work = JobWork("bittc", views=1, thresholds=4, extractions=1)
+    assert parse_latency("fixed:50").latency_s(1.0, work) == pytest.approx(0.05)
+    assert parse_latency("measured").latency_s(0.0123, work) == pytest.approx(0.0123)
     p = parse_latency("profile:this-cpu")
-    assert p.latency_s(0.0, 4) == pytest.approx((p.profile.a_ms + 4 * p.profile.b_ms) * 1e-3)
+    c = p.profile.costs["bittc"]
+    assert p.latency_s(0.0, work) == pytest.approx((c.job_ms + c.view_ms + 4 * c.threshold_ms + c.extract_ms) * 1e-3)
     assert p.deterministic and not parse_latency("measured").deterministic
     with pytest.raises(LatencyError, match="nan"):
-        parse_latency("measured").latency_s(math.nan, 1)
+        parse_latency("measured").latency_s(math.nan, work)
+
+
+def test_a_profile_charges_every_extraction_view_and_threshold():
+    p = parse_latency("profile:arm-a72-assumed").profile
+    c = p.costs["bittc"]
+    stream, after_skip = JobWork("bittc", 1, 4, 1), JobWork("bittc", 1, 4, 2)
+    assert p.latency_ms(after_skip) - p.latency_ms(stream) == pytest.approx(c.extract_ms)
+    fovea = JobWork("bittc", 2, 8, 2)
+    assert p.latency_ms(fovea) - p.latency_ms(stream) == pytest.approx(c.view_ms + 4 * c.threshold_ms + c.extract_ms)
+    assert p.latency_ms(JobWork(None)) == 0.0  # the oracle computes nothing a profile prices
+
+
+def test_feature_cache_model_counts_what_the_estimator_extracts():
+    cache = FeatureCacheModel(4)
+    assert cache.extractions((0, 2)) == 2  # the first pair: both frames
+    assert cache.extractions((1, 3)) == 2  # stride 2, every frame: frame 1 was never seen
+    assert cache.extractions((2, 4)) == 1  # steady stream
+    assert cache.extractions((3, 5)) == 1
+    assert cache.extractions((6, 8)) == 2  # after a skip the older frame is new too
+    assert FeatureCacheModel(0).extractions((0, 1)) == 0  # no cache: nothing counted (flow)
 
 
 @pytest.mark.parametrize("bad", ["fixed", "fixed:", "fixed:abc", "fixed:-5", "fixed:nan", "profile:nope", "slow", ""])

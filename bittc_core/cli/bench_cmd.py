@@ -4,8 +4,9 @@ from __future__ import annotations
 
 import argparse
 import sys
+from pathlib import Path
 
-from bittc_core.cli.common import check_frame_size, parse_size
+from bittc_core.cli.common import check_frame_size, parse_fovea, parse_size
 from bittc_core.errors import BittcError, CliError
 
 DEFAULT_CONFIG = "cpu-small-corr"
@@ -18,7 +19,9 @@ def add_parser(sub) -> argparse.ArgumentParser:
         description="Streaming latency (96x288 unless --size) for K = 1, 2, 4, 8, 16, 24 thresholds, "
         "binary and continuous, plain and flip-averaged, with the flow baseline timed in the same run. "
         "With --backend torch onnxruntime: both backends timed in the same interleaved rounds, "
-        "side by side with their ratios.",
+        "side by side with their ratios. With --fovea off 4: whole closed-loop jobs instead (the network on "
+        "every view plus the geofence controller's own work), per backend x fovea x K, binary and "
+        "continuous, in the same interleaved rounds; --out FILE writes them as JSON rows.",
     )
     p.add_argument(
         "--config",
@@ -42,6 +45,14 @@ def add_parser(sub) -> argparse.ArgumentParser:
         default="96x288",
         help="frame size HxW [px], multiples of 3 (default 96x288, the shipped weights' camera)",
     )
+    p.add_argument(
+        "--fovea",
+        nargs="+",
+        default=None,
+        metavar="ZOOM|off",
+        help="time whole per-frame jobs with and without a fovea (e.g. off 4) instead of the estimator alone",
+    )
+    p.add_argument("--out", default=None, metavar="FILE", help="with --fovea: write the rows as JSON (.json)")
     return p
 
 
@@ -102,12 +113,74 @@ def estimators_for(backends, weights, onnx, size_hw, threads, tmp_dir):
     return out
 
 
+def run_jobs(args, settings, backends, ests) -> int:
+    """--fovea: whole per-frame jobs per backend x fovea x K (binary: a geofence-controller job;
+    continuous: the network's continuous TTC on every view), all in the same interleaved rounds."""
+    import json
+
+    from bittc_core.atomic import write_text_atomic
+    from sim.job_timing import JobSetting, time_jobs
+
+    foveas = list(dict.fromkeys(parse_fovea(f) for f in args.fovea))
+    jobs = [
+        *(JobSetting(k, z) for z in foveas for k in settings.thresholds),
+        *(JobSetting(0, z, continuous=True) for z in foveas),
+    ]
+    rows = []
+    for backend, est in ests.items():
+        ms = time_jobs(est, jobs, (settings.height_px, settings.width_px), settings.calls)
+        rows += [
+            {
+                "backend": backend,
+                "fovea_zoom": j.fovea_zoom,
+                "num_alphas": j.num_alphas if not j.continuous else None,
+                "output": "continuous" if j.continuous else "binary",
+                "tta": "none",
+                "median_ms": t,
+            }
+            for j, t in zip(jobs, ms)
+        ]
+    print(
+        f"whole per-frame jobs at {settings.height_px}x{settings.width_px} px, {settings.threads} threads, "
+        f"{settings.calls} interleaved rounds (the estimator on every view + the geofence controller)"
+    )
+    base = foveas[0]
+    print(f"{'backend':<12}{'fovea':>7}{'K':>6}{'median ms':>11}{'/ ' + ('off' if base is None else f'x{base:g}'):>9}")
+    ref = {(r["backend"], r["output"], r["num_alphas"]): r["median_ms"] for r in rows if r["fovea_zoom"] == base}
+    for r in rows:
+        k = "cont" if r["output"] == "continuous" else str(r["num_alphas"])
+        ratio = r["median_ms"] / ref[(r["backend"], r["output"], r["num_alphas"])]
+        zoom = "off" if r["fovea_zoom"] is None else f"x{r['fovea_zoom']:g}"
+        print(f"{r['backend']:<12}{zoom:>7}{k:>6}{r['median_ms']:>11.2f}{ratio:>9.2f}")
+    if args.out:
+        write_text_atomic(Path(args.out), json.dumps({"rows": rows}, indent=2) + "\n")
+        print(f"wrote {args.out}")
+    return 0
+
+
 def run(args) -> int:
     import tempfile
 
     from bittc_core.benchmark import run_backend_comparison, run_benchmark
 
     settings, backends = check_common(args)
+    if args.out is not None and args.fovea is None:
+        raise CliError("--out applies with --fovea (the job benchmark)")
+    if args.fovea is not None:
+        if args.out is not None:
+            out = Path(args.out)
+            if out.suffix != ".json":
+                raise CliError(f"--out {args.out!r}: expected a .json file")
+            if not out.parent.is_dir():
+                raise CliError(f"--out {args.out!r}: folder {str(out.parent)!r} does not exist")
+        if args.config is not None:
+            raise CliError("--config with --fovea: the job benchmark times trained weights (--weights)")
+        [parse_fovea(v) for v in args.fovea]  # every value checked before anything is timed
+        with tempfile.TemporaryDirectory(prefix="bittc_bench_") as tmp:
+            ests = estimators_for(
+                backends, args.weights, args.onnx, (settings.height_px, settings.width_px), settings.threads, tmp
+            )
+            return run_jobs(args, settings, backends, ests)
     if backends == ["torch"]:
         run_benchmark(settings, weights=args.weights)
         return 0

@@ -175,7 +175,7 @@ def backend_kwargs(args, method: str = "bittc") -> dict:
 
 
 #: the CLI's fovea when --fovea is not given (chosen by the closed-loop comparison in docs/closed_loop.md)
-DEFAULT_FOVEA = "off"
+DEFAULT_FOVEA = "4"
 
 
 def add_fovea_flag(parser, many: bool = False) -> None:
@@ -183,13 +183,18 @@ def add_fovea_flag(parser, many: bool = False) -> None:
     what = "a second, magnified view of the same camera beside the wide one: focal x ZOOM, centred on the road ahead"
     if many:
         parser.add_argument(
-            "--fovea", nargs="+", default=[DEFAULT_FOVEA], metavar="ZOOM|off", help=f"{what}; one or more settings "
-            f"(default {DEFAULT_FOVEA})"
+            "--fovea",
+            nargs="+",
+            default=[DEFAULT_FOVEA],
+            metavar="ZOOM|off",
+            help=f"{what}; one or more settings (default {DEFAULT_FOVEA})",
         )
     else:
         parser.add_argument(
-            "--fovea", default=DEFAULT_FOVEA, metavar="ZOOM|off", help=f"{what}; off: the wide view alone "
-            f"(default {DEFAULT_FOVEA})"
+            "--fovea",
+            default=DEFAULT_FOVEA,
+            metavar="ZOOM|off",
+            help=f"{what}; off: the wide view alone (default {DEFAULT_FOVEA})",
         )
 
 

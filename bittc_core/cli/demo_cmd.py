@@ -8,25 +8,36 @@ import sys
 import time
 
 DEMO_NUM_ALPHAS = (1, 4, 16)
+DEMO_FOVEAS = ("off", "4")  # the wide view alone beside wide + fovea x4
 DEMO_VIDEO_CASE = "CCRs-50"  # where K decides the outcome: the first brake comes later with fewer fences
 
 
 def add_parser(sub) -> argparse.ArgumentParser:
     p = sub.add_parser(
         "demo",
-        help="the shipped network at K = 1, 4, 16 and the oracle on the demo suite, as a report",
+        help="the shipped network at K = 1, 4, 16 with and without a fovea, and the oracle, as a report",
         description="Runs the demo suite (`bittc scenarios --suites`) with the geofence controller "
-        "(shipped weights) at K = 1, 4 and 16 and the oracle, measured latency, writes a video of "
+        "(shipped weights) at K = 1, 4 and 16, with the wide view alone and with a fovea, and the oracle, "
+        "measured latency, writes a video of "
         f"{DEMO_VIDEO_CASE} and an HTML report, and prints where the report is.",
     )
     p.add_argument("--out", default="runs/demo", help="output directory (default runs/demo; must be new or a demo)")
+    p.add_argument(
+        "--fovea",
+        nargs="+",
+        default=list(DEMO_FOVEAS),
+        metavar="ZOOM|off",
+        help=f"fovea settings to compare (default {' '.join(DEMO_FOVEAS)}: the wide view alone and with a fovea)",
+    )
     return p
 
 
 def run(args) -> int:
+    from bittc_core.cli.common import parse_fovea
     from bittc_core.cli.sweep_cmd import execute
     from sim.sweep.plan import SweepSettings
 
+    foveas = tuple(dict.fromkeys(parse_fovea(f) for f in args.fovea))
     settings = SweepSettings(
         suites=("demo",),
         controllers=("geofence", "oracle"),
@@ -35,6 +46,7 @@ def run(args) -> int:
         seeds=1,
         video_cases=(DEMO_VIDEO_CASE,),
         timeline_case=DEMO_VIDEO_CASE,
+        foveas=foveas,
     )
     args.workers, args.backend, args.ray_address, args.resume = 1, "local", None, True
     t0 = time.perf_counter()

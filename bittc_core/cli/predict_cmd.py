@@ -15,6 +15,15 @@ each file whole or not at all (temporary name, then rename):
 * ``prediction.json``: the settings, the share of pixels inside each geofence and the
   wall time of the calls (``wall_ms``; a process's first call includes start-up costs,
   ``bittc bench`` measures the steady-state latency).
+
+With ``--fovea ZOOM`` on a high-resolution pair (a 375x1242 KITTI-like frame, say) and
+``--size HxW`` (the network's size): the wide view is the whole frame resized to HxW; the
+fovea is the crop of (native height / ZOOM) x (native width / ZOOM) pixels around the
+image centre (``--fovea-center U V`` [native px] moves it; the window is kept inside the
+frame) resized to HxW, i.e. the view of a ZOOM-times longer lens. A zoom whose crop has
+fewer native pixels than HxW (it would be upsampled) is refused. The fovea's maps go into
+``prediction.npz`` as ``fovea_geofence``, ``fovea_eta``, ``fovea_ttc_s``, its pictures into
+``fovea_geofence.png`` and ``fovea_ttc.png``, its crop box into ``prediction.json``.
 """
 
 from __future__ import annotations
@@ -81,6 +90,20 @@ def add_parser(sub) -> argparse.ArgumentParser:
         metavar="HxW",
         help="resize both frames to HxW px first (area interpolation); default: as they are",
     )
+    p.add_argument(
+        "--fovea",
+        default="off",
+        metavar="ZOOM|off",
+        help="also a fovea: the native crop of 1/ZOOM of the frame around its centre, resized to --size (default off)",
+    )
+    p.add_argument(
+        "--fovea-center",
+        type=float,
+        nargs=2,
+        default=None,
+        metavar=("U", "V"),
+        help="the fovea's centre [native px, column row] (default: the image centre)",
+    )
     add_device_flag(p)
     return p
 
@@ -116,9 +139,34 @@ def geofence_overlay(
     return out.round().astype(np.uint8)
 
 
+def fovea_box(shape_hw, zoom: float, size_hw, center_uv=None) -> tuple[int, int, int, int]:
+    """(u0, v0, u1, v1) [native px, u1 and v1 exclusive] of the fovea's crop of a frame of
+    ``shape_hw``: (H / zoom) x (W / zoom) pixels centred on ``center_uv`` (default the image
+    centre), shifted to lie inside the frame. Refused (CliError) where the crop would hold fewer
+    native pixels than ``size_hw`` or the centre lies outside the frame."""
+    H, W = shape_hw
+    h, w = size_hw
+    ch, cw = H / zoom, W / zoom
+    if ch < h or cw < w:
+        raise CliError(
+            f"--fovea {zoom:g}: a {H}x{W} px frame gives a {ch:.0f}x{cw:.0f} px crop, fewer native pixels than "
+            f"the network's {h}x{w} (needs frames of at least {zoom * h:.0f}x{zoom * w:.0f} px, or a smaller zoom)"
+        )
+    u, v = center_uv if center_uv is not None else ((W - 1) / 2, (H - 1) / 2)
+    if not (0 <= u <= W - 1 and 0 <= v <= H - 1):
+        raise CliError(
+            f"--fovea-center {u:g} {v:g}: outside the {W}x{H} px frame (U in [0, {W - 1}], V in [0, {H - 1}])"
+        )
+    cw_i, ch_i = int(round(cw)), int(round(ch))
+    u0 = min(max(int(round(u + 0.5 - cw_i / 2)), 0), W - cw_i)
+    v0 = min(max(int(round(v + 0.5 - ch_i / 2)), 0), H - ch_i)
+    return u0, v0, u0 + cw_i, v0 + ch_i
+
+
 def run(args) -> int:
     import cv2
 
+    from bittc_core.cli.common import parse_fovea
     from bittc_core.data.npz_writer import save_npz
     from bittc_core.estimator import make_estimator
     from bittc_core.estimator.base import as_thresholds, quantize
@@ -133,12 +181,22 @@ def run(args) -> int:
     if args.method != "bittc" and (args.weights is not None or args.tta != "none" or args.device != "auto"):
         raise CliError(f"--weights / --tta / --device apply to --method bittc, not {args.method!r}")
     size = parse_size(args.size) if args.size is not None else None
+    zoom = parse_fovea(args.fovea)
+    if zoom is None and args.fovea_center is not None:
+        raise CliError("--fovea-center applies with --fovea ZOOM")
+    if zoom is not None and size is None:
+        raise CliError("--fovea needs --size HxW: the size both views are given to the network at")
     prev, latest = read_rgb(args.prev, "PREV"), read_rgb(args.latest, "LATEST")
     if prev.shape != latest.shape:
         raise CliError(
             f"PREV is {prev.shape[0]}x{prev.shape[1]} px but LATEST is "
             f"{latest.shape[0]}x{latest.shape[1]} px: the frames must be the same size"
         )
+    fovea = None
+    if zoom is not None:
+        box = fovea_box(latest.shape[:2], zoom, size, args.fovea_center)
+        u0, v0, u1, v1 = box
+        fovea = [cv2.resize(img[v0:v1, u0:u1], size[::-1], interpolation=cv2.INTER_AREA) for img in (prev, latest)]
     if size is not None:
         prev, latest = (cv2.resize(img, size[::-1], interpolation=cv2.INTER_AREA) for img in (prev, latest))
     check_frame_size(latest.shape[:2], args.method, "--size" if size is not None else "PREV and LATEST")
@@ -157,6 +215,18 @@ def run(args) -> int:
     ttc = eta_to_tau(eta, est.dt_s).astype(np.float32)
     order = np.argsort(thr)
     quantized = quantize(geofence[order]).astype(np.int16)
+    maps = {"geofence": geofence.astype(np.float32), "thresholds_s": thr, "quantized": quantized}
+    maps |= {"eta": eta.astype(np.float32), "ttc_s": ttc}
+    views = {"": (latest, geofence, ttc)}  # file-name prefix -> (image, geofences, TTC) of each view
+    if fovea is not None:
+        # the fovea's own estimator state: its frames are another view, not the next frames of a stream
+        fest = est.fork() if hasattr(est, "fork") else est
+        f_geofence = fest.geofence(fovea[0], fovea[1], thr)
+        f_eta = fest.motion_in_depth(fovea[0], fovea[1])
+        f_ttc = eta_to_tau(f_eta, est.dt_s).astype(np.float32)
+        maps |= {"fovea_geofence": f_geofence.astype(np.float32), "fovea_eta": f_eta.astype(np.float32)}
+        maps["fovea_ttc_s"] = f_ttc
+        views["fovea_"] = (fovea[1], f_geofence, f_ttc)
 
     summary = {
         "method": args.method,
@@ -172,29 +242,28 @@ def run(args) -> int:
         "inside_share": [round(float((g > 0.5).mean()), 6) for g in geofence],
         "wall_ms": {"geofence": round((t1 - t0) * 1e3, 3), "continuous": round((t2 - t1) * 1e3, 3)},
     }
+    if fovea is not None:
+        summary["fovea"] = {
+            "zoom": zoom,
+            "crop_box_px": list(box),
+            "inside_share": [round(float((g > 0.5).mean()), 6) for g in maps["fovea_geofence"]],
+        }
     tmp = Path(tempfile.mkdtemp(prefix=".predict-", dir=out_dir))
     try:
-        save_npz(
-            tmp / "prediction.npz",
-            {
-                "geofence": geofence.astype(np.float32),
-                "thresholds_s": thr,
-                "quantized": quantized,
-                "eta": eta.astype(np.float32),
-                "ttc_s": ttc,
-            },
-        )
+        save_npz(tmp / "prediction.npz", maps)
         ones = np.ones(ttc.shape, bool)
-        for name, img in (
-            ("geofence.png", geofence_overlay(latest, geofence, thr)),
-            ("ttc.png", ttc_overlay(latest, ttc, ones, ones.astype(np.int32), 0.5, 0.5)),
-        ):
+        images = {}
+        for prefix, (img, g, t) in views.items():
+            images[f"{prefix}geofence.png"] = geofence_overlay(img, g, thr)
+            images[f"{prefix}ttc.png"] = ttc_overlay(img, t, ones, ones.astype(np.int32), 0.5, 0.5)
+        for name, img in images.items():
             ok, png = cv2.imencode(".png", cv2.cvtColor(img, cv2.COLOR_RGB2BGR))
             if not ok:
                 raise CliError(f"could not encode {name}")
             (tmp / name).write_bytes(png.tobytes())
         (tmp / "prediction.json").write_text(json.dumps(summary, indent=1) + "\n")
-        for name in OUTPUT_FILES:
+        written = [*OUTPUT_FILES, *(n for n in images if n.startswith("fovea_"))]
+        for name in written:
             os.replace(tmp / name, out_dir / name)
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
@@ -205,5 +274,9 @@ def run(args) -> int:
     )
     for t, share in zip(thr, summary["inside_share"]):
         print(f"  tau <= {t:g} s: {share:.1%} of the pixels inside")
-    print(f"wrote {', '.join(str(out_dir / n) for n in OUTPUT_FILES)}")
+    if fovea is not None:
+        print(f"fovea x{zoom:g}: crop {box} of the native frame")
+        for t, share in zip(thr, summary["fovea"]["inside_share"]):
+            print(f"  tau <= {t:g} s: {share:.1%} of the fovea's pixels inside")
+    print(f"wrote {', '.join(str(out_dir / n) for n in written)}")
     return 0

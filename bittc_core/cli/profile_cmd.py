@@ -4,15 +4,19 @@ from __future__ import annotations
 
 import argparse
 
+from bittc_core.cli.common import add_fovea_flag
+
 
 def add_parser(sub) -> argparse.ArgumentParser:
     p = sub.add_parser(
         "profile",
-        help="measure this machine's latency profile (L = a + b*K) into a file",
-        description="Times the network in streaming mode for K = 1, 2, 4, 8, 16, 24 and in continuous "
-        "mode (interleaved rounds, as bittc bench), fits L = a + b * K by least squares and writes "
-        "FILE (YAML: the fit, the raw timings, the machine, the package versions, the date). "
-        "`bittc run` and `bittc sweep` read it with --latency profile:FILE.",
+        help="measure this machine's latency profile (the cost terms of a closed-loop job) into a file",
+        description="Times whole geofence-controller jobs (the estimator on every view plus the controller's "
+        "own work) for the network and the flow baseline: streaming and after a skip, wide view alone and "
+        "with a fovea, several K (interleaved rounds, as bittc bench); fits each family's cost terms "
+        "L = job + views * view + thresholds * threshold + extractions * extract [ms] by non-negative least "
+        "squares and writes FILE (YAML: the terms, the raw timings, the fit, the machine, the package versions, "
+        "the date). `bittc run` and `bittc sweep` read it with --latency profile:FILE.",
     )
     p.add_argument("--out", required=True, metavar="FILE", help="the profile file to write (.yaml)")
     p.add_argument("--name", default=None, help="a label for the profile (default: this machine's host name)")
@@ -26,7 +30,8 @@ def add_parser(sub) -> argparse.ArgumentParser:
     p.add_argument("--weights", default=None, help="checkpoint (default: the shipped weights)")
     p.add_argument("--size", default="96x288", help="frame size HxW [px], multiples of 3 (default 96x288)")
     p.add_argument("--threads", type=int, default=2, help="threads of the backend (default 2)")
-    p.add_argument("--calls", type=int, default=30, help="timed calls per K (default 30)")
+    p.add_argument("--calls", type=int, default=30, help="timed calls per setting (default 30)")
+    add_fovea_flag(p)
     return p
 
 
@@ -34,13 +39,13 @@ def run(args) -> int:
     from pathlib import Path
 
     from bittc_core import profiling
-    from bittc_core.benchmark import BenchSettings
     from bittc_core.checkpoint import DEFAULT_WEIGHTS, load_checkpoint, release_name
-    from bittc_core.cli.common import backend_kwargs, check_frame_size, parse_size
+    from bittc_core.cli.common import backend_kwargs, check_frame_size, parse_fovea, parse_size
     from bittc_core.errors import CliError
     from bittc_core.estimator import make_estimator
     from bittc_core.export.manifest import sha256_file
-    from sim.profile_file import fit_latency, write_profile_file
+    from sim.job_timing import JobSetting, profile_settings, time_jobs
+    from sim.profile_file import fit_cost_terms, write_profile_file
 
     out = Path(args.out)
     if out.suffix not in (".yaml", ".yml"):
@@ -51,32 +56,51 @@ def run(args) -> int:
         raise CliError(f"--calls {args.calls} / --threads {args.threads}: must be > 0")
     h, w = parse_size(args.size)
     check_frame_size((h, w), "bittc", f"--size {args.size}", hint="")
+    zoom = parse_fovea(args.fovea) or 4.0  # the second view's zoom does not change its cost
     weights = args.weights or str(DEFAULT_WEIGHTS)
     import torch
 
     torch.set_num_threads(args.threads)
     est = make_estimator("bittc", device="cpu", **({"weights": weights} | backend_kwargs(args)))
-    s = BenchSettings(height_px=h, width_px=w, calls=args.calls, threads=args.threads)
+    flow = make_estimator("flow")
+    jobs = {"bittc": profile_settings("bittc", zoom), "flow": profile_settings("flow", zoom)}
     print(
-        f"timing {args.backend} at {h}x{w} px, {args.threads} threads, K = {', '.join(map(str, s.thresholds))} "
-        f"and continuous ({args.calls} calls each, interleaved) ..."
+        f"timing {args.backend} and flow jobs at {h}x{w} px, {args.threads} threads: "
+        f"{sum(map(len, jobs.values()))} settings and continuous, {args.calls} calls each, interleaved ..."
     )
-    t = profiling.measure(est, s)
-    a, b, rms, worst = fit_latency(t["binary"])
+    net_ms = time_jobs(est, [*jobs["bittc"], JobSetting(0, continuous=True)], (h, w), args.calls)
+    flow_ms = time_jobs(flow, jobs["flow"], (h, w), args.calls)
+    measured = {"bittc": net_ms[:-1], "flow": flow_ms}
+    doc_terms, fits, timings = {}, {}, []
+    for family, settings in jobs.items():
+        rows = [(s.work(family, cached=family == "bittc"), t) for s, t in zip(settings, measured[family])]
+        terms, rms, worst = fit_cost_terms(rows)
+        doc_terms[family] = {k: getattr(terms, k) for k in ("extract_ms", "view_ms", "threshold_ms", "job_ms")}
+        fits[family] = {"rms_residual_ms": round(rms, 3), "max_residual_ms": round(worst, 3)}
+        timings += [
+            {
+                "estimator": family,
+                "views": wk.views,
+                "thresholds": wk.thresholds,
+                "extractions": wk.extractions,
+                "median_ms": t,
+            }
+            for wk, t in rows
+        ]
     m = profiling.machine()
     name = args.name or m["node"] or "this-machine"
     ckpt = load_checkpoint(weights)
     doc = {
         "name": name,
-        "a_ms": round(a, 3),
-        "b_ms": round(b, 3),
-        "continuous_ms": t["continuous"],
+        **doc_terms,
+        "continuous_ms": net_ms[-1],
         "measured": True,
         "source": f"`bittc profile` on {m['processor']} ({m['cpus']} CPUs), {args.backend} with {args.threads} "
-        f"threads, {h}x{w} px, weights {Path(weights).name}: least-squares fit of the streaming "
-        f"medians over K = {', '.join(map(str, s.thresholds))}, {profiling.today()}",
-        "timings_ms": t,
-        "fit": {"rms_residual_ms": round(rms, 3), "max_residual_ms": round(worst, 3)},
+        f"threads, {h}x{w} px, weights {Path(weights).name}: non-negative least squares of the medians of "
+        f"{len(timings)} kinds of whole controller jobs (wide and fovea x{zoom:g}, streaming and after a skip), "
+        f"{profiling.today()}",
+        "timings_ms": timings,
+        "fit": fits,
         "backend": args.backend,
         "size_px": [h, w],
         "threads": args.threads,
@@ -86,9 +110,21 @@ def run(args) -> int:
         "date": profiling.today(),
     }
     write_profile_file(out, doc)
-    print(f"{'K':>4} {'median ms':>10} {'fit ms':>8}")
-    for k, v in t["binary"].items():
-        print(f"{k:>4} {v:>10.2f} {a + b * k:>8.2f}")
-    print(f"L = {a:.2f} + {b:.2f} * K ms (rms residual {rms:.2f} ms); continuous {t['continuous']:.1f} ms")
-    print(f"wrote {out}; use it with --latency profile:{out}")
+    from sim.latency import CostTerms, JobWork
+
+    print(f"{'estimator':<10}{'views':>6}{'thr':>5}{'extr':>5}{'median ms':>11}{'fit ms':>8}")
+    for r in timings:
+        wk = JobWork(r["estimator"], r["views"], r["thresholds"], r["extractions"])
+        fit = CostTerms(**doc_terms[r["estimator"]]).latency_ms(wk)
+        print(
+            f"{r['estimator']:<10}{r['views']:>6}{r['thresholds']:>5}{r['extractions']:>5}{r['median_ms']:>11.2f}"
+            f"{fit:>8.2f}"
+        )
+    for family, t in doc_terms.items():
+        print(
+            f"{family}: "
+            + ", ".join(f"{k} {v:.2f}" for k, v in t.items())
+            + f" (rms {fits[family]['rms_residual_ms']:.2f} ms)"
+        )
+    print(f"continuous {net_ms[-1]:.1f} ms per view; wrote {out}; use it with --latency profile:{out}")
     return 0

@@ -9,7 +9,7 @@ import textwrap
 def add_parser(sub) -> argparse.ArgumentParser:
     return sub.add_parser(
         "profiles",
-        help="list the device latency profiles (L = a + b*K ms)",
+        help="list the device latency profiles (cost terms per estimator family)",
         description="Lists the named device profiles that --latency profile:NAME reads, with "
         "where each number comes from (bittc profile measures a new one).",
     )
@@ -21,7 +21,13 @@ def run(args) -> int:
     for p in named_profiles().values():
         kind = "measured" if p.measured else "not measured"
         cont = f", continuous {p.continuous_ms:g} ms" if p.continuous_ms is not None else ""
-        print(f"{p.name:<22} L = {p.a_ms:g} + {p.b_ms:g} * K ms{cont}  [{kind}]")
+        print(f"{p.name:<22} [{kind}]{cont}")
+        for family, c in p.costs.items():
+            print(
+                f"    {family:<6} L = {c.job_ms:g} + {c.view_ms:g} x views + {c.threshold_ms:g} x thresholds "
+                f"+ {c.extract_ms:g} x extractions ms (wide, K = 4: {p.stream_ms(family, 4):.1f} ms; "
+                f"with a fovea: {p.stream_ms(family, 4, views=2):.1f} ms)"
+            )
         print(textwrap.fill(p.source, width=96, initial_indent=" " * 4, subsequent_indent=" " * 4))
     print(
         f"(from {PROFILES_FILE} and {MEASURED_PROFILES_DIR}/*.yaml; a file of your own: --latency profile:FILE, "

@@ -19,7 +19,11 @@ def add_parser(sub) -> argparse.ArgumentParser:
     )
     add_controller_flags(p, default="oracle")
     p.add_argument("--out", required=True, help="output directory")
-    p.add_argument("--scenarios", default=None, help="comma-separated names/families (default: all bundled)")
+    p.add_argument(
+        "--scenarios",
+        default=None,
+        help="comma-separated suites (ncap, near, benign, all, demo), families or cases (default: all bundled)",
+    )
     add_seed_flag(p, "scenery/appearance/traffic seed of every case")
     p.add_argument("--markdown", action="store_true", help="print the table as Markdown (as in the README)")
     p.add_argument("--video", action="store_true", help="also write camera.mp4 for every case")
@@ -34,7 +38,7 @@ def run(args) -> int:
     camera = camera_from_args(args)
     textures = textures_from_args(args)
     if args.scenarios:
-        cases = [c for name in args.scenarios.split(",") for c in scenarios.resolve(name.strip())]
+        cases = [c for name in args.scenarios.split(",") for c in scenarios.resolve_suite(name.strip())]
     else:
         cases = list(scenarios.bundled().cases.values())
     controller, latency = controller_from_args(args, camera)

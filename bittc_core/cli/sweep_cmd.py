@@ -7,7 +7,7 @@ import argparse
 import shlex
 import sys
 
-from bittc_core.cli.common import flag_error
+from bittc_core.cli.common import add_fovea_flag, flag_error, parse_fovea
 from bittc_core.errors import CliError, ConfigError
 
 
@@ -48,6 +48,7 @@ def add_parser(sub) -> argparse.ArgumentParser:
         metavar="MODE",
         help="latency modes: measured, fixed:MS, profile:NAME, profile:FILE (default measured)",
     )
+    add_fovea_flag(p, many=True)
     p.add_argument("--seeds", type=int, default=1, help="seeds 0..N-1 per run (default 1)")
     p.add_argument("--out", required=True, help="output directory (new, or this sweep's with --resume)")
     p.add_argument(
@@ -96,6 +97,7 @@ _FLAGS = {
     "workers": "--workers",
     "net_backend": "--net-backend",
     "onnx": "--onnx",
+    "foveas": "--fovea",
 }
 
 
@@ -114,6 +116,7 @@ def settings_from_args(args):
         timeline_case=args.timeline_case,
         net_backend=args.net_backend,
         onnx=args.onnx,
+        foveas=tuple(dict.fromkeys(parse_fovea(f) for f in args.fovea)),
     )
 
 

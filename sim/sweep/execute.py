@@ -101,7 +101,7 @@ def execute_run(spec: RunSpec, settings: SweepSettings, out: str) -> tuple[dict 
         summary = run_case(
             case,
             _controller(spec, settings),
-            CameraConfig(),
+            CameraConfig(fovea_zoom=spec.fovea_zoom),
             spec.seed,
             partial,
             video=spec.case in settings.video_cases,

@@ -1,10 +1,11 @@
 """What a sweep runs: its settings (stored as ``DIR/sweep.json``) and its list of runs.
 
-A run is one scenario case, one controller, one threshold count K, one latency mode and
-one seed. Controllers without thresholds (``oracle``, ``none``, a user's own) run once
-per latency mode with K = 0. Seeds are 0 .. seeds - 1. The runs are listed in a fixed
-order (suite order of the cases, then controller, K, latency mode, seed), which is the
-row order of ``results.csv`` whatever the order they finish in.
+A run is one scenario case, one controller, one fovea setting, one threshold count K,
+one latency mode and one seed. Controllers without thresholds (``oracle``, ``none``, a
+user's own) run once per latency mode with K = 0 and without a fovea. Seeds are
+0 .. seeds - 1. The runs are listed in a fixed order (suite order of the cases, then
+controller, fovea, K, latency mode, seed), which is the row order of ``results.csv``
+whatever the order they finish in.
 """
 
 from __future__ import annotations
@@ -38,6 +39,7 @@ class SweepSettings:
     timeline_case: str | None = None  # the case of the timeline plot (None: the first threat)
     net_backend: str = "torch"  # geofence: the network on torch or onnxruntime
     onnx: str | None = None  # with net_backend "onnxruntime": the export folder
+    foveas: tuple[float | None, ...] = (None,)  # geofence/flow: fovea zooms (None: the wide view alone)
 
     def to_json(self) -> str:
         return json.dumps(asdict(self), indent=2, sort_keys=True) + "\n"
@@ -61,12 +63,15 @@ class RunSpec:
     latency: str
     seed: int
     index: int = field(default=0, compare=False)  # position in the plan
+    fovea_zoom: float | None = None  # None: the wide view alone
 
     @property
     def config_id(self) -> str:
-        """The controller x K x latency configuration, e.g. ``geofence-K4-fixed_50``."""
+        """The controller x fovea x K x latency configuration, e.g. ``geofence-K4-fixed_50``
+        or ``geofence-F4-K4-measured``."""
+        f = f"-F{self.fovea_zoom:g}" if self.fovea_zoom is not None else ""
         k = f"-K{self.num_alphas}" if self.num_alphas else ""
-        return f"{_slug(self.controller)}{k}-{_slug(self.latency)}"
+        return f"{_slug(self.controller)}{_slug(f)}{k}-{_slug(self.latency)}"
 
     @property
     def run_id(self) -> str:
@@ -112,6 +117,15 @@ def check_settings(s: SweepSettings) -> list:
     _check_net_backend(s)
     if s.frame_stride is not None and not 1 <= s.frame_stride <= 10:
         raise ConfigError(f"frame_stride: {s.frame_stride} must be in [1, 10]")
+    from sim.camera import check_fovea_zoom
+
+    if not s.foveas:
+        raise ConfigError("foveas: give at least one fovea setting (None for the wide view alone)")
+    for z in s.foveas:
+        try:
+            check_fovea_zoom(z)
+        except ValueError as e:
+            raise ConfigError(f"foveas: {e}") from None
     cases = suite_cases(s.suites)
     names = {c.name for c in cases}
     for name in s.video_cases + ((s.timeline_case,) if s.timeline_case else ()):
@@ -162,9 +176,10 @@ def plan_runs(s: SweepSettings, cases: list) -> list[RunSpec]:
     runs = []
     for case in cases:
         for name in s.controllers:
-            ks = s.num_alphas if name in controllers.ESTIMATOR_CONTROLLERS else (0,)
-            for k in ks:
-                for latency in s.latencies:
-                    for seed in range(s.seeds):
-                        runs.append(RunSpec(case.name, name, k, latency, seed, len(runs)))
+            est = name in controllers.ESTIMATOR_CONTROLLERS
+            for zoom in s.foveas if est else (None,):
+                for k in s.num_alphas if est else (0,):
+                    for latency in s.latencies:
+                        for seed in range(s.seeds):
+                            runs.append(RunSpec(case.name, name, k, latency, seed, len(runs), zoom))
     return runs

@@ -9,7 +9,10 @@
 ``impact_vs_speed.png``   relative impact speed against ego speed of each threat run,
                           over Euro NCAP's colour bands (``sim.sweep.ncap``);
 ``timeline.png``          one case: ego speed, exact TTC and brake command against time,
-                          one line per configuration (seed 0).
+                          one line per configuration (seed 0);
+``rates_vs_latency.png``  threats avoided and FCW pass rate against the mean latency per
+                          frame, one line per controller x fovea x latency mode, one point
+                          per K: spend the compute on thresholds or on a fovea?
 Controllers without thresholds (K = 0) are drawn as horizontal lines in the K plots.
 """
 
@@ -22,7 +25,14 @@ from pathlib import Path
 from sim.sweep import ncap
 from sim.sweep.tables import FCW_TTC_S
 
-PLOTS = ("latency_vs_k.png", "warning_ttc_vs_k.png", "rates_vs_k.png", "impact_vs_speed.png", "timeline.png")
+PLOTS = (
+    "latency_vs_k.png",
+    "warning_ttc_vs_k.png",
+    "rates_vs_k.png",
+    "impact_vs_speed.png",
+    "timeline.png",
+    "rates_vs_latency.png",
+)
 DPI = 110
 
 
@@ -58,17 +68,22 @@ def _save(fig, path: Path) -> None:
         _plt().close(fig)
 
 
+def _fovea(row: dict) -> str:
+    z = row.get("fovea_zoom")
+    return "" if z is None or z == "" else f" fovea x{float(z):g}"
+
+
 def _by_config(summary: list[dict]):
-    """(controller, latency) -> [(K, row)] sorted by K."""
+    """(controller [+ fovea], latency) -> [(K, row)] sorted by K."""
     out: dict[tuple, list] = {}
     for s in summary:
-        out.setdefault((s["controller"], s["latency_mode"]), []).append((s["num_alphas"], s))
+        out.setdefault((s["controller"] + _fovea(s), s["latency_mode"]), []).append((s["num_alphas"], s))
     return {k: sorted(v, key=lambda kv: kv[0]) for k, v in out.items()}
 
 
 def config_label(row: dict) -> str:
     k = f" K={row['num_alphas']}" if row["num_alphas"] else ""
-    return f"{row['controller']}{k}, {row['latency_mode']}"
+    return f"{row['controller']}{_fovea(row)}{k}, {row['latency_mode']}"
 
 
 def _k_plot(ax, summary, value, label_fmt="{c}, {l}"):
@@ -127,7 +142,33 @@ def plot_all(
 
     _impact_plot(plt, d / PLOTS[3], rows)
     _timeline_plot(plt, d / PLOTS[4], out_dir, rows, timeline_case)
+    _latency_rates_plot(plt, d / PLOTS[5], est, frame_dt_s)
     return list(PLOTS)
+
+
+def _latency_rates_plot(plt, path: Path, est: list[dict], frame_dt_s: float) -> None:
+    """Threats avoided and FCW pass rate against the mean latency per frame; a line per
+    controller x fovea x latency mode through its K values (each point labelled K)."""
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(10, 4))
+    for (c, lat), pts in _by_config(est).items():
+        pts = [(k, s) for k, s in pts if s["latency_ms_mean"] is not None and s["threats"]]
+        if not pts:
+            continue
+        xs = [s["latency_ms_mean"] for _, s in pts]
+        for ax, value in ((a1, lambda s: s["threats_avoided"] / s["threats"]), (a2, lambda s: s["fcw_pass_rate"])):
+            ys = [value(s) for _, s in pts]
+            ax.plot(xs, ys, "o-", label=f"{c}, {lat}")
+            for x, y, (k, _) in zip(xs, ys, pts):
+                ax.annotate(f"K{k}", (x, y), textcoords="offset points", xytext=(3, 3), fontsize=7)
+    for ax, label in ((a1, "threats avoided (share)"), (a2, f"FCW pass rate (first warning at TTC >= {FCW_TTC_S} s)")):
+        ax.axvline(frame_dt_s * 1e3, color="k", lw=0.8)
+        ax.set_xlabel("mean latency per frame [ms] (black: the frame interval)")
+        ax.set_ylabel(label)
+        ax.set_ylim(-0.02, 1.02)
+        ax.grid(alpha=0.3)
+    fig.suptitle("thresholds or a fovea: what the compute buys", fontsize=10)
+    _legend(a1, fontsize=7)
+    _save(fig, path)
 
 
 def _impact_plot(plt, path: Path, rows: list[dict]) -> None:
@@ -140,10 +181,11 @@ def _impact_plot(plt, path: Path, rows: list[dict]) -> None:
         ax.add_patch(Rectangle((x0, y0), x1 - x0, y1 - y0, color=ncap.BAND_COLOURS[band], alpha=0.25, lw=0))
     ax.axhspan(-1, 0, color=ncap.BAND_COLOURS["green"], alpha=0.35, lw=0)
     ax.set_xlim(0, vmax + 5)
-    configs = sorted({(r["controller"], r["num_alphas"], r["latency_mode"]) for r in threats}, key=str)
+    key = lambda r: (r["controller"], _fovea(r), r["num_alphas"], r["latency_mode"])  # noqa: E731
+    configs = sorted({key(r) for r in threats}, key=str)
     markers = "os^vD<>pX*"
-    for i, (c, k, lat) in enumerate(configs):
-        pts = [r for r in threats if (r["controller"], r["num_alphas"], r["latency_mode"]) == (c, k, lat)]
+    for i, cfg in enumerate(configs):
+        pts = [r for r in threats if key(r) == cfg]
         jitter = (i - (len(configs) - 1) / 2) * 0.6
         ax.scatter(
             [r["ego_speed_kph"] + jitter for r in pts],

@@ -1,5 +1,5 @@
 """``results.csv`` (one row per run) and the per-configuration summary
-(``summary.csv``, ``summary.md``: one row per controller x K x latency mode).
+(``summary.csv``, ``summary.md``: one row per controller x fovea x K x latency mode).
 
 Definitions (threat runs are those of scenarios with ``threat: true``):
     threats avoided      threat runs without a collision / threat runs
@@ -30,6 +30,7 @@ RUN_KEYS = ("run_id", "status", "error", "config", "ego_speed_kph", "ncap_band",
 RESULT_COLUMNS = RUN_KEYS + tuple(k for k in SUMMARY_KEYS if k not in RUN_KEYS) + ("fence_lag_s",)
 SUMMARY_COLUMNS = (
     "controller",
+    "fovea_zoom",
     "num_alphas",
     "latency_mode",
     "runs",
@@ -63,6 +64,7 @@ def result_row(spec, case, summary: dict | None, error: str | None) -> dict:
         config=spec.config_id,
         controller=spec.controller,
         num_alphas=spec.num_alphas,
+        fovea_zoom=spec.fovea_zoom,
         latency_mode=spec.latency,
         seed=spec.seed,
         scenario=spec.case,
@@ -100,9 +102,9 @@ def summarize(rows: list[dict]) -> list[dict]:
     """One row per configuration, in the order the configurations first appear."""
     groups: dict[tuple, list[dict]] = {}
     for r in rows:
-        groups.setdefault((r["controller"], r["num_alphas"], r["latency_mode"]), []).append(r)
+        groups.setdefault((r["controller"], r["fovea_zoom"], r["num_alphas"], r["latency_mode"]), []).append(r)
     out = []
-    for (controller, k, latency), rs in groups.items():
+    for (controller, zoom, k, latency), rs in groups.items():
         ok = [r for r in rs if r["status"] == "ok"]
         threats = [r for r in ok if r["threat"]]
         benign = [r for r in ok if not r["threat"]]
@@ -111,6 +113,7 @@ def summarize(rows: list[dict]) -> list[dict]:
         bands = [r["ncap_band"] for r in threats if r["ncap_band"]]
         s = {
             "controller": controller,
+            "fovea_zoom": zoom,
             "num_alphas": k,
             "latency_mode": latency,
             "runs": len(rs),
@@ -153,6 +156,7 @@ def _fmt(v, nd=2) -> str:
 
 SUMMARY_HEAD = (
     "controller",
+    "fovea",
     "K",
     "latency",
     "avoided",
@@ -167,11 +171,17 @@ SUMMARY_HEAD = (
 )
 
 
+def fovea_label(zoom) -> str:
+    """None -> 'off', 4.0 -> 'x4'."""
+    return "off" if zoom is None or zoom == "" else f"x{float(zoom):g}"
+
+
 def summary_cells(s: dict) -> tuple[str, ...]:
     """One summary row as the cells of ``SUMMARY_HEAD`` (text)."""
     avoided = f"{s['threats_avoided']}/{s['threats']}" + (f" ({s['failed']} failed)" if s["failed"] else "")
     return (
         str(s["controller"]),
+        fovea_label(s["fovea_zoom"]),
         str(s["num_alphas"] or "–"),
         str(s["latency_mode"]),
         avoided,
