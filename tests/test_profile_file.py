@@ -132,6 +132,8 @@ def test_run_charges_what_the_file_predicts(tmp_path):
         "4",
         "--latency",
         f"profile:{path}",
+        "--fovea",
+        "off",
         "--out",
         str(out),
     ]

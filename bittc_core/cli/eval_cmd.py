@@ -47,7 +47,7 @@ def add_parser(sub) -> argparse.ArgumentParser:
         "--scenarios",
         default=None,
         metavar="SUITE",
-        help="instead of --data: a suite (ncap, benign, all, demo), a bundled name or a YAML file",
+        help="instead of --data: a suite (ncap, near, benign, all, demo), a bundled name or a YAML file",
     )
     p.add_argument(
         "--tau",
