@@ -90,7 +90,15 @@ from controllers.stages import StageConfig, StagedBrake
 COST_FAMILIES = ("bittc", "flow")  # estimators a device profile prices (sim.latency.COST_FAMILIES)
 
 DEFAULT_TAU_RANGE_S = (0.8, 2.8)  # [s] camera-plane TTC spanned by default_thresholds
-MAX_THRESHOLDS = 64
+MAX_THRESHOLDS = 64  # thresholds per job: the one bound of K (CLI, sweeps, the controller)
+MAX_FRAME_STRIDE = 10  # [frames] the one bound of the frame stride
+
+
+def check_frame_stride(frame_stride) -> int:
+    """An integer stride in [1, MAX_FRAME_STRIDE]; anything else is refused by value."""
+    if isinstance(frame_stride, bool) or not isinstance(frame_stride, int) or not 1 <= frame_stride <= MAX_FRAME_STRIDE:
+        raise ConfigError(f"frame stride {frame_stride!r}: must be an integer in [1, {MAX_FRAME_STRIDE}]")
+    return frame_stride
 
 
 def default_thresholds(num_alphas: int) -> tuple[float, ...]:
@@ -149,7 +157,7 @@ class GeofenceConfig:
             "persistence_frames": self.persistence_frames >= 1,
             "release_frames": self.release_frames >= 1,
             "min_speed_mps": self.min_speed_mps >= 0,
-            "frame_stride": isinstance(self.frame_stride, int) and 1 <= self.frame_stride <= 10,
+            "frame_stride": isinstance(self.frame_stride, int) and 1 <= self.frame_stride <= MAX_FRAME_STRIDE,
             "fovea_fences_from_s": math.isfinite(self.fovea_fences_from_s) and self.fovea_fences_from_s >= 0,
         }
         for name, ok in checks.items():

@@ -53,11 +53,6 @@ def static_depth_m(cal: Calibration, ego_speed_mps: float, tau_s: float) -> floa
     return ego_speed_mps * math.cos(math.radians(cal.pitch_deg)) * tau_s
 
 
-def horizon_row(cal: Calibration) -> float:
-    """Row (may be fractional or outside the image) where the ground meets the sky."""
-    return cal.cy_px - cal.fy_px * math.tan(math.radians(cal.pitch_deg))
-
-
 def corridor_columns(cal: Calibration, half_width_m: float, depth_m: float) -> tuple[int, int]:
     """Inclusive column range [u0, u1] of the ego's corridor at ``depth_m`` (clipped to the image)."""
     half_px = cal.fx_px * half_width_m / max(depth_m, 1e-6)

@@ -108,9 +108,9 @@ class ScenarioEnv(gym.Env):
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode {render_mode!r} is not supported")
         self.latency = latency if isinstance(latency, LatencyMode) else parse_latency(latency)
-        if not isinstance(frame_stride, int) or not 1 <= frame_stride <= 10:
-            raise ValueError(f"frame_stride={frame_stride!r}: must be an integer in [1, 10]")
-        self.frame_stride = frame_stride
+        from controllers.geofence import check_frame_stride
+
+        self.frame_stride = check_frame_stride(frame_stride)
         # the work a profile charges per step, set by a wrapper that runs an estimator (sim.latency)
         self.num_alphas = 0  # thresholds per view
         self.views = 1

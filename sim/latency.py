@@ -7,8 +7,8 @@ Convention (streaming perception, Li, Wang and Ramanan, ECCV 2020):
     and its output, a brake command, takes effect at t_start + L, where L is the
     job's latency [s]. Frames are not queued: when the estimator becomes free at
     t_free it takes the newest frame captured by then (paired with the frame captured
-    just before it, so the pair's interval stays the frame interval), or, if none is
-    newer than its last job, the next frame at its capture time. Frames in between
+    ``frame_stride`` frames before it, so the pair's interval stays fixed), or, if none
+    is newer than its last job, the next frame at its capture time. Frames in between
     are skipped. The controller acts on the newest output that is ready. The brake
     actuator's own delay comes after the command takes effect (``sim.traffic``).
 

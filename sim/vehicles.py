@@ -42,10 +42,6 @@ class VehicleSpec:
     height_m: float
     palette_index: int = 0  # body colour: PALETTE[palette_index]
 
-    @property
-    def color_rgb(self) -> tuple[float, float, float]:
-        return PALETTE[self.palette_index]
-
     def __post_init__(self) -> None:
         if self.kind not in VEHICLE_CLASSES and self.kind != "ego":
             raise ValueError(f"unknown vehicle kind {self.kind!r}; known: {sorted(VEHICLE_CLASSES)}")

@@ -56,3 +56,22 @@ def test_bench_times_the_size_it_is_given(capsys):
 
     assert main(["bench", "--config", "tiny", "--size", "48x96", "--calls", "1", "--threads", "1"]) == 0
     assert "48x96 px" in capsys.readouterr().out
+
+
+def test_bench_fovea_writes_one_row_per_job(tmp_path, capsys):
+    import json
+
+    from bittc_core.cli import main
+
+    out = tmp_path / "bench.json"
+    assert main(["bench", "--fovea", "off", "4", "--calls", "1", "--out", str(out)]) == 0
+    rows = json.loads(out.read_text())["rows"]
+    keys = {"backend", "fovea_zoom", "num_alphas", "output", "tta", "median_ms"}
+    assert all(set(r) == keys for r in rows)
+    binary = {(r["fovea_zoom"], r["num_alphas"]): r["median_ms"] for r in rows if r["output"] == "binary"}
+    assert set(binary) == {(z, k) for z in (None, 4.0) for k in (1, 2, 4, 8, 16, 24)}
+    assert {r["fovea_zoom"] for r in rows if r["output"] == "continuous"} == {None, 4.0}
+    assert binary[(4.0, 24)] > binary[(None, 24)]  # the fovea's job runs the network twice
+    assert main(["bench", "--fovea", "0.5", "--out", str(tmp_path / "x.json")]) == 2
+    assert main(["bench", "--out", str(tmp_path / "x.json")]) == 2
+    assert not (tmp_path / "x.json").exists()

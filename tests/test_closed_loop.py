@@ -160,3 +160,16 @@ def test_a_profile_charges_both_views_and_every_extraction(tmp_path):
         latency=parse_latency("profile:this-cpu"),
     )
     assert flow["latency_ms_mean"] == pytest.approx(prof.latency_ms(JobWork("flow", 1, 2, 0)), abs=1e-3)
+
+
+@pytest.mark.parametrize("bad", [0, 11, 2.5, True])
+def test_the_frame_stride_has_one_bound_everywhere(bad):
+    from controllers.geofence import GeofenceConfig, check_frame_stride
+    from sim.env import ScenarioEnv
+
+    with pytest.raises(ConfigError, match="frame stride"):
+        check_frame_stride(bad)
+    with pytest.raises(ConfigError, match="frame_stride"):
+        GeofenceConfig(frame_stride=bad)
+    with pytest.raises(ConfigError, match="frame stride"):
+        ScenarioEnv("CCRs-30", frame_stride=bad)

@@ -108,3 +108,54 @@ def test_predict_bad_input_exits_2_and_writes_nothing(pair, tmp_path, capsys, fi
     assert main(["predict", *(str(pair / f) for f in files), "--out", str(out), *extra]) == 2
     assert needle in capsys.readouterr().err
     assert not out.exists()  # every check runs before the folder is made
+
+
+@pytest.fixture(scope="module")
+def big_pair(tmp_path_factory):
+    """A 390x1170 pair: 4.06 x 96 rows and 4.06 x 288 columns, so zoom 4 fits and 4.1 does not."""
+    d = tmp_path_factory.mktemp("big")
+    rng = np.random.default_rng(1)
+    prev = cv2.GaussianBlur(rng.integers(0, 256, (390, 1170, 3)).astype(np.uint8), (0, 0), 3.0)
+    zoom = cv2.getRotationMatrix2D(((1170 - 1) / 2, (390 - 1) / 2), 0.0, 1.05)
+    latest = cv2.warpAffine(prev, zoom, (1170, 390), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REFLECT)
+    for name, img in (("prev.png", prev), ("latest.png", latest)):
+        cv2.imwrite(str(d / name), img)
+    return d
+
+
+def test_predict_fovea_is_the_native_centre_crop(big_pair, tmp_path):
+    from bittc_core.cli.predict_cmd import fovea_box
+
+    out = tmp_path / "pred"
+    argv = ["predict", str(big_pair / "prev.png"), str(big_pair / "latest.png"), "--size", "96x288"]
+    assert main([*argv, "--fovea", "4", "--out", str(out)]) == 0
+    s = json.loads((out / "prediction.json").read_text())
+    u0, v0, u1, v1 = s["fovea"]["crop_box_px"]
+    assert (u1 - u0, v1 - v0) == (292, 98) and abs((u0 + u1) / 2 - 585) <= 1 and abs((v0 + v1) / 2 - 195) <= 1
+    z = np.load(out / "prediction.npz")
+    assert z["fovea_geofence"].shape == z["geofence"].shape == (3, 96, 288)
+    # the fovea's maps are the estimator's on the resized crop
+    rgb = [cv2.cvtColor(cv2.imread(str(big_pair / n)), cv2.COLOR_BGR2RGB) for n in ("prev.png", "latest.png")]
+    crops = [cv2.resize(im[v0:v1, u0:u1], (288, 96), interpolation=cv2.INTER_AREA) for im in rgb]
+    est = make_estimator("bittc")
+    np.testing.assert_allclose(z["fovea_geofence"], est.geofence(*crops, [0.5, 1.0, 2.0]), atol=1e-5)
+    assert {"fovea_geofence.png", "fovea_ttc.png"} <= {p.name for p in out.iterdir()}
+    # a centre near the edge: the window stays inside the frame
+    assert fovea_box((390, 1170), 4.0, (96, 288), (5.0, 380.0)) == (0, 292, 292, 390)
+
+
+@pytest.mark.parametrize(
+    "extra,needle",
+    [
+        (["--fovea", "4.1"], "fewer native pixels"),
+        (["--fovea", "0.5"], "--fovea '0.5'"),
+        (["--fovea", "nan"], "--fovea 'nan'"),
+        (["--fovea", "4", "--fovea-center", "2000", "10"], "outside the 1170x390 px frame"),
+        (["--fovea-center", "10", "10"], "applies with --fovea"),
+    ],
+)
+def test_predict_refuses_a_fovea_the_frames_cannot_supply(big_pair, tmp_path, capsys, extra, needle):
+    out = tmp_path / "pred"
+    argv = ["predict", str(big_pair / "prev.png"), str(big_pair / "latest.png"), "--size", "96x288", "--out", str(out)]
+    assert main(argv + extra) == 2
+    assert needle in capsys.readouterr().err and not out.exists()

@@ -321,3 +321,39 @@ def test_results_have_the_documented_columns(tiny, tmp_path):
     ):
         assert col in summary
     assert Path(tmp_path / "sw" / "report.html").stat().st_size > 1000
+
+
+def test_the_fovea_is_a_dimension_of_camera_controllers_only(tiny):
+    s = _settings(tiny, controllers=("geofence", "oracle"), num_alphas=(4,), foveas=(None, 4.0))
+    plan = plan_runs(s, check_settings(s))
+    # 2 cases x (geofence: 2 foveas + oracle: 1)
+    assert len(plan) == 2 * 3 and len({p.run_id for p in plan}) == len(plan)
+    assert {p.run_id.split("/")[0] for p in plan} == {
+        "geofence-K4-fixed_50",
+        "geofence-F4-K4-fixed_50",
+        "oracle-fixed_50",
+    }
+    assert {p.fovea_zoom for p in plan if p.controller == "oracle"} == {None}
+    with pytest.raises(ConfigError, match="foveas: fovea zoom 0.5"):
+        check_settings(_settings(tiny, foveas=(0.5,)))
+
+
+def test_a_fovea_sweep_reports_fovea_zoom_and_draws_the_latency_plot(tiny, tmp_path):
+    import csv
+
+    s = _settings(tiny, controllers=("flow",), num_alphas=(1, 2), foveas=(None, 2.0), latencies=("fixed:20",))
+    run_sweep(s, tmp_path / "sw", progress=False)
+    rows = list(csv.DictReader((tmp_path / "sw" / "results.csv").open()))
+    assert {r["fovea_zoom"] for r in rows} == {"", "2.0"}
+    summary = list(csv.DictReader((tmp_path / "sw" / "summary.csv").open()))
+    assert len(summary) == 4 and {r["fovea_zoom"] for r in summary} == {"", "2.0"}
+    assert "| flow | x2 | 1 |" in (tmp_path / "sw" / "summary.md").read_text()
+    assert (tmp_path / "sw" / "plots" / "rates_vs_latency.png").stat().st_size > 1000
+    assert "rates_vs_latency.png" in (tmp_path / "sw" / "report.html").read_text()
+
+
+def test_cli_refuses_a_bad_fovea_before_any_run(tmp_path, capsys):
+    out = tmp_path / "sw"
+    argv = ["sweep", "--suite", "CCRs-20", "--controllers", "flow", "--fovea", "off", "x2", "--out", str(out)]
+    assert main(argv) == 2
+    assert "--fovea 'x2'" in capsys.readouterr().err and not out.exists()

@@ -45,12 +45,6 @@ def check_frame_size(size_hw: tuple[int, int], method: str, what: str, hint: str
         )
 
 
-def positive_int(name: str, value: int) -> int:
-    if value <= 0:
-        raise CliError(f"{name} {value}: must be > 0")
-    return value
-
-
 def non_negative_int(name: str, value: int, upper: int | None = None) -> int:
     if value < 0 or (upper is not None and value > upper):
         raise CliError(

@@ -126,8 +126,12 @@ def _check(args) -> Path:
         except ConfigError as e:
             raise CliError(f"--tau: {e}") from None
         check_seed(args.seed)
-        if not 1 <= args.frame_stride <= 10:
-            raise CliError(f"--frame-stride {args.frame_stride}: must be in [1, 10]")
+        from controllers.geofence import check_frame_stride
+
+        try:
+            check_frame_stride(args.frame_stride)
+        except ConfigError as e:
+            raise CliError(f"--frame-stride: {e}") from None
         if args.plot is not None and not args.plot.endswith(".png"):
             raise CliError(f"--plot {args.plot!r}: expected a .png file")
         args.fovea_zoom = parse_fovea(args.fovea)

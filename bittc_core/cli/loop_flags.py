@@ -75,9 +75,12 @@ def controller_from_args(args, camera):
         flag = "--num-alphas" if args.num_alphas is not None else "--ttc-thresholds"
         raise CliError(f"{flag}: {e}") from None
     if args.frame_stride is not None:
-        if not 1 <= args.frame_stride <= 10:
-            raise CliError(f"--frame-stride {args.frame_stride}: must be in [1, 10]")
-        settings["frame_stride"] = args.frame_stride
+        from controllers.geofence import check_frame_stride
+
+        try:
+            settings["frame_stride"] = check_frame_stride(args.frame_stride)
+        except ConfigError as e:
+            raise CliError(f"--frame-stride: {e}") from None
     if args.weights is not None:
         if name != "geofence":
             raise CliError(f"--weights applies to the geofence controller, not {name!r}")

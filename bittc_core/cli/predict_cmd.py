@@ -163,15 +163,9 @@ def fovea_box(shape_hw, zoom: float, size_hw, center_uv=None) -> tuple[int, int,
     return u0, v0, u0 + cw_i, v0 + ch_i
 
 
-def run(args) -> int:
-    import cv2
-
+def _check_flags(args) -> tuple[tuple[int, int] | None, float | None]:
+    """-> (the network size or None, the fovea zoom or None); every flag checked."""
     from bittc_core.cli.common import parse_fovea
-    from bittc_core.data.npz_writer import save_npz
-    from bittc_core.estimator import make_estimator
-    from bittc_core.estimator.base import as_thresholds, quantize
-    from bittc_core.ttc import eta_to_tau
-    from sim.video import ttc_overlay
 
     if args.method not in METHODS:
         raise CliError(f"--method {args.method!r}: expected one of {METHODS}")
@@ -186,74 +180,68 @@ def run(args) -> int:
         raise CliError("--fovea-center applies with --fovea ZOOM")
     if zoom is not None and size is None:
         raise CliError("--fovea needs --size HxW: the size both views are given to the network at")
+    return size, zoom
+
+
+def _read_views(args, size, zoom) -> tuple[dict, tuple | None]:
+    """-> ({'': wide (prev, latest), 'fovea_': fovea (prev, latest)}, the fovea's crop box or None)."""
+    import cv2
+
     prev, latest = read_rgb(args.prev, "PREV"), read_rgb(args.latest, "LATEST")
     if prev.shape != latest.shape:
         raise CliError(
             f"PREV is {prev.shape[0]}x{prev.shape[1]} px but LATEST is "
             f"{latest.shape[0]}x{latest.shape[1]} px: the frames must be the same size"
         )
-    fovea = None
+    views, box = {}, None
     if zoom is not None:
         box = fovea_box(latest.shape[:2], zoom, size, args.fovea_center)
         u0, v0, u1, v1 = box
-        fovea = [cv2.resize(img[v0:v1, u0:u1], size[::-1], interpolation=cv2.INTER_AREA) for img in (prev, latest)]
+        views["fovea_"] = [
+            cv2.resize(im[v0:v1, u0:u1], size[::-1], interpolation=cv2.INTER_AREA) for im in (prev, latest)
+        ]
     if size is not None:
         prev, latest = (cv2.resize(img, size[::-1], interpolation=cv2.INTER_AREA) for img in (prev, latest))
     check_frame_size(latest.shape[:2], args.method, "--size" if size is not None else "PREV and LATEST")
-    kw = {"weights": args.weights} | backend_kwargs(args, args.method)
-    est = make_estimator(args.method, device=args.device, **kw, **({"tta": args.tta} if args.method == "bittc" else {}))
-    thr = as_thresholds(args.tau, est.tau_range_s, sorted_=False)
-    if len(np.unique(thr)) != len(thr):
-        raise CliError(f"--tau {' '.join(f'{t:g}' for t in thr)}: a threshold is given twice")
-    out_dir = writable_dir(args.out)  # every check above runs before anything is written
+    return {"": (prev, latest), **views}, box
 
-    t0 = time.perf_counter()
-    geofence = est.geofence(prev, latest, thr)
-    t1 = time.perf_counter()
-    eta = est.motion_in_depth(prev, latest)  # the same pair: the network reuses its cached features
-    t2 = time.perf_counter()
-    ttc = eta_to_tau(eta, est.dt_s).astype(np.float32)
-    order = np.argsort(thr)
-    quantized = quantize(geofence[order]).astype(np.int16)
-    maps = {"geofence": geofence.astype(np.float32), "thresholds_s": thr, "quantized": quantized}
-    maps |= {"eta": eta.astype(np.float32), "ttc_s": ttc}
-    views = {"": (latest, geofence, ttc)}  # file-name prefix -> (image, geofences, TTC) of each view
-    if fovea is not None:
+
+def _predict(est, views: dict, thr: np.ndarray) -> tuple[dict, dict, dict]:
+    """-> (the npz arrays, prefix -> (latest image, geofences, TTC) per view, wall times [ms] of the wide view)."""
+    from bittc_core.estimator.base import quantize
+    from bittc_core.ttc import eta_to_tau
+
+    maps, shown, wall = {"thresholds_s": thr}, {}, {}
+    for prefix, (prev, latest) in views.items():
         # the fovea's own estimator state: its frames are another view, not the next frames of a stream
-        fest = est.fork() if hasattr(est, "fork") else est
-        f_geofence = fest.geofence(fovea[0], fovea[1], thr)
-        f_eta = fest.motion_in_depth(fovea[0], fovea[1])
-        f_ttc = eta_to_tau(f_eta, est.dt_s).astype(np.float32)
-        maps |= {"fovea_geofence": f_geofence.astype(np.float32), "fovea_eta": f_eta.astype(np.float32)}
-        maps["fovea_ttc_s"] = f_ttc
-        views["fovea_"] = (fovea[1], f_geofence, f_ttc)
+        e = est if not prefix or not hasattr(est, "fork") else est.fork()
+        t0 = time.perf_counter()
+        geofence = e.geofence(prev, latest, thr)
+        t1 = time.perf_counter()
+        eta = e.motion_in_depth(prev, latest)  # the same pair: the network reuses its cached features
+        if not prefix:
+            wall = {"geofence": round((t1 - t0) * 1e3, 3), "continuous": round((time.perf_counter() - t1) * 1e3, 3)}
+            maps["quantized"] = quantize(geofence[np.argsort(thr)]).astype(np.int16)
+        ttc = eta_to_tau(eta, est.dt_s).astype(np.float32)
+        maps |= {f"{prefix}geofence": geofence.astype(np.float32), f"{prefix}eta": eta.astype(np.float32)}
+        maps[f"{prefix}ttc_s"] = ttc
+        shown[prefix] = (latest, geofence, ttc)
+    return maps, shown, wall
 
-    summary = {
-        "method": args.method,
-        "weights": args.weights,
-        "tta": args.tta,
-        "backend": args.backend,
-        "device": str(getattr(est, "device", "cpu")),
-        "prev": args.prev,
-        "latest": args.latest,
-        "size_hw": list(latest.shape[:2]),
-        "frame_dt_s": est.dt_s,
-        "thresholds_s": thr.tolist(),
-        "inside_share": [round(float((g > 0.5).mean()), 6) for g in geofence],
-        "wall_ms": {"geofence": round((t1 - t0) * 1e3, 3), "continuous": round((t2 - t1) * 1e3, 3)},
-    }
-    if fovea is not None:
-        summary["fovea"] = {
-            "zoom": zoom,
-            "crop_box_px": list(box),
-            "inside_share": [round(float((g > 0.5).mean()), 6) for g in maps["fovea_geofence"]],
-        }
+
+def _write(out_dir: Path, maps: dict, shown: dict, thr: np.ndarray, summary: dict) -> list[str]:
+    """Every output file under a temporary name, then renamed into ``out_dir``; -> their names."""
+    import cv2
+
+    from bittc_core.data.npz_writer import save_npz
+    from sim.video import ttc_overlay
+
     tmp = Path(tempfile.mkdtemp(prefix=".predict-", dir=out_dir))
     try:
         save_npz(tmp / "prediction.npz", maps)
-        ones = np.ones(ttc.shape, bool)
         images = {}
-        for prefix, (img, g, t) in views.items():
+        for prefix, (img, g, t) in shown.items():
+            ones = np.ones(t.shape, bool)
             images[f"{prefix}geofence.png"] = geofence_overlay(img, g, thr)
             images[f"{prefix}ttc.png"] = ttc_overlay(img, t, ones, ones.astype(np.int32), 0.5, 0.5)
         for name, img in images.items():
@@ -267,14 +255,51 @@ def run(args) -> int:
             os.replace(tmp / name, out_dir / name)
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
+    return written
 
+
+def _share(geofence: np.ndarray) -> list[float]:
+    return [round(float((g > 0.5).mean()), 6) for g in geofence]
+
+
+def run(args) -> int:
+    from bittc_core.estimator import make_estimator
+    from bittc_core.estimator.base import as_thresholds
+
+    size, zoom = _check_flags(args)
+    views, box = _read_views(args, size, zoom)
+    kw = {"weights": args.weights} | backend_kwargs(args, args.method)
+    est = make_estimator(args.method, device=args.device, **kw, **({"tta": args.tta} if args.method == "bittc" else {}))
+    thr = as_thresholds(args.tau, est.tau_range_s, sorted_=False)
+    if len(np.unique(thr)) != len(thr):
+        raise CliError(f"--tau {' '.join(f'{t:g}' for t in thr)}: a threshold is given twice")
+    out_dir = writable_dir(args.out)  # every check above runs before anything is written
+    maps, shown, wall = _predict(est, views, thr)
+    latest = views[""][1]
+    summary = {
+        "method": args.method,
+        "weights": args.weights,
+        "tta": args.tta,
+        "backend": args.backend,
+        "device": str(getattr(est, "device", "cpu")),
+        "prev": args.prev,
+        "latest": args.latest,
+        "size_hw": list(latest.shape[:2]),
+        "frame_dt_s": est.dt_s,
+        "thresholds_s": thr.tolist(),
+        "inside_share": _share(maps["geofence"]),
+        "wall_ms": wall,
+    }
+    if box is not None:
+        summary["fovea"] = {"zoom": zoom, "crop_box_px": list(box), "inside_share": _share(maps["fovea_geofence"])}
+    written = _write(out_dir, maps, shown, thr, summary)
     print(
         f"{args.method}: {latest.shape[0]}x{latest.shape[1]} px, frame_dt_s {est.dt_s:g} s, "
-        f"geofences {summary['wall_ms']['geofence']:.1f} ms, continuous {summary['wall_ms']['continuous']:.1f} ms"
+        f"geofences {wall['geofence']:.1f} ms, continuous {wall['continuous']:.1f} ms"
     )
     for t, share in zip(thr, summary["inside_share"]):
         print(f"  tau <= {t:g} s: {share:.1%} of the pixels inside")
-    if fovea is not None:
+    if box is not None:
         print(f"fovea x{zoom:g}: crop {box} of the native frame")
         for t, share in zip(thr, summary["fovea"]["inside_share"]):
             print(f"  tau <= {t:g} s: {share:.1%} of the fovea's pixels inside")

@@ -219,19 +219,32 @@ def write_yaml_atomic(path: Path, data: dict) -> None:
 
 def run(args) -> int:
     _check(args)
+    from bittc_core.parallel import OutputLock
+    from bittc_core.train import RunPaths
+
+    paths = RunPaths.from_out(args.out)
+    lock = OutputLock(paths.best.parent, what="--out", name=f".{paths.best.stem}.lock")
+    try:
+        paths.best.parent.mkdir(parents=True, exist_ok=True)
+        lock.acquire()  # a second training into the same --out is refused with the holder's pid
+    except OSError as err:
+        raise CliError(f"--out {args.out!r}: cannot create its folder ({err})") from None
+    try:
+        return _train(args, paths)
+    finally:
+        lock.release()
+
+
+def _train(args, paths) -> int:
+    """The run behind ``run``, with this run's output locked."""
     import torch
 
     from bittc_core.checkpoint import build_network, init_network, load_checkpoint, pick_device
     from bittc_core.model import BinaryTTCNet, get_config
-    from bittc_core.train import STAGES, RunPaths, TrainConfig, Trainer
+    from bittc_core.train import STAGES, TrainConfig, Trainer
     from bittc_core.train.data import open_split
     from bittc_core.train.params import frozen_prefixes, param_groups
 
-    paths = RunPaths.from_out(args.out)
-    try:
-        paths.best.parent.mkdir(parents=True, exist_ok=True)
-    except OSError as err:
-        raise CliError(f"--out {args.out!r}: cannot create its folder ({err})") from None
     if args.resume and not paths.last.is_file():
         raise CliError(f"--resume: no resumable checkpoint at {str(paths.last)!r}")
     if not args.resume and (paths.last.exists() or paths.csv.exists()):

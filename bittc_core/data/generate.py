@@ -29,6 +29,7 @@ from bittc_core.data.gen_config import (
 )
 from bittc_core.data.gen_pool import run_local, run_ray, steady_rate
 from bittc_core.errors import ConfigError
+from bittc_core.parallel import LOCK_FILE, OutputLock, bounded_workers, check_workers
 
 __all__ = ["GenerationConfig", "generate", "pending_indices", "prepare_dir"]
 
@@ -38,7 +39,7 @@ def prepare_dir(out: Path, cfg: GenerationConfig) -> None:
     if out.exists() and not out.is_dir():
         raise ConfigError(f"output folder {str(out)!r}: exists and is not a directory")
     gen = out / "generation.yaml"
-    if out.exists() and any(out.iterdir()):
+    if out.exists() and any(p.name != LOCK_FILE for p in out.iterdir()):
         if not gen.exists():
             raise ConfigError(
                 f"output folder {str(out)!r}: is not empty and is not a bittc dataset (no generation.yaml)"
@@ -108,8 +109,7 @@ def generate(
         raise ConfigError(f"split {split!r}: must be one of {', '.join(SPLITS)}")
     if not 0 < n_samples <= MAX_SAMPLES_PER_SPLIT:
         raise ConfigError(f"samples {n_samples}: must be in [1, {MAX_SAMPLES_PER_SPLIT}]")
-    if workers <= 0:
-        raise ConfigError(f"workers {workers}: must be > 0")
+    check_workers(workers)
     if backend not in BACKENDS:
         raise ConfigError(f"backend {backend!r}: must be one of {', '.join(BACKENDS)}")
     if ray_address is not None and backend != "ray":
@@ -120,6 +120,11 @@ def generate(
         except ImportError:
             raise ConfigError("backend 'ray': Ray is not installed; pip install 'bittc-sim[ray]'") from None
     prepare_dir(out, cfg)
+    with OutputLock(out, "output folder"):  # a second generator into this folder is refused while this one runs
+        return _generate_locked(out, cfg, split, n_samples, workers, backend, ray_address, progress)
+
+
+def _generate_locked(out, cfg, split, n_samples, workers, backend, ray_address, progress) -> dict:
     split_dir = out / split
     todo, damaged = pending_indices(split_dir, n_samples, cfg.clip_length)
     t0 = time.perf_counter()
@@ -134,6 +139,7 @@ def generate(
         "backend": backend,
     }
     if todo:
+        workers = run["workers"] = bounded_workers(workers, len(todo))
         runner = run_ray if backend == "ray" else run_local
         tally = runner(cfg, split_dir, split, todo, workers, ray_address, progress)
         run["written"], run["failed"] = tally.written, sorted(tally.failed)

@@ -20,6 +20,7 @@ import traceback
 from dataclasses import dataclass
 from pathlib import Path
 
+from bittc_core.parallel import threads_per_worker
 from sim.sweep.plan import RunSpec, SweepSettings
 
 MAX_TRIES = 2  # a failed run is tried once more, then reported
@@ -43,10 +44,6 @@ def pin_threads(threads: int) -> None:
     import torch
 
     torch.set_num_threads(threads)
-
-
-def threads_per_worker(workers: int) -> int:
-    return max(1, (os.cpu_count() or 1) // workers)
 
 
 def _controller(spec: RunSpec, settings: SweepSettings):

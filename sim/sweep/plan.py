@@ -19,7 +19,6 @@ from bittc_core.errors import ConfigError
 
 SETTINGS_FILE = "sweep.json"
 MAX_SEEDS = 1000
-MAX_NUM_ALPHAS = 64
 NET_BACKENDS = ("torch", "onnxruntime")
 
 
@@ -94,11 +93,13 @@ def check_settings(s: SweepSettings) -> list:
         raise ConfigError("suites: name at least one suite, scenario or file")
     if not s.controllers:
         raise ConfigError("controllers: name at least one controller")
+    from controllers.geofence import MAX_THRESHOLDS
+
     if not s.num_alphas:
         raise ConfigError("num_alphas: give at least one K")
     for k in s.num_alphas:
-        if isinstance(k, bool) or not isinstance(k, int) or not 1 <= k <= MAX_NUM_ALPHAS:
-            raise ConfigError(f"num_alphas: K = {k!r} must be an integer in [1, {MAX_NUM_ALPHAS}]")
+        if isinstance(k, bool) or not isinstance(k, int) or not 1 <= k <= MAX_THRESHOLDS:
+            raise ConfigError(f"num_alphas: K = {k!r} must be an integer in [1, {MAX_THRESHOLDS}]")
     if not s.latencies:
         raise ConfigError("latencies: give at least one latency mode")
     for text in s.latencies:
@@ -115,8 +116,13 @@ def check_settings(s: SweepSettings) -> list:
     if s.weights is not None and not Path(s.weights).is_file():
         raise ConfigError(f"weights: no file {s.weights!r}")
     _check_net_backend(s)
-    if s.frame_stride is not None and not 1 <= s.frame_stride <= 10:
-        raise ConfigError(f"frame_stride: {s.frame_stride} must be in [1, 10]")
+    if s.frame_stride is not None:
+        from controllers.geofence import check_frame_stride
+
+        try:
+            check_frame_stride(s.frame_stride)
+        except ConfigError as e:
+            raise ConfigError(f"frame_stride: {e}") from None
     from sim.camera import check_fovea_zoom
 
     if not s.foveas:

@@ -9,6 +9,7 @@ Output folder::
     DIR/results.csv     one row per run (failed runs too, with their error)
     DIR/failures.json   run id -> traceback of the runs that failed (empty when none)
     DIR/summary.csv, DIR/summary.md, DIR/plots/*.png, DIR/report.html
+    DIR/.bittc.lock     held while a sweep runs into DIR (a second one is refused)
 
 With fixed or profile latency every file under ``DIR`` except ``timing.json``,
 ``report.html`` and the plots' timing notes is the same for the same settings, whatever
@@ -24,6 +25,7 @@ from pathlib import Path
 
 from bittc_core.atomic import write_text_atomic
 from bittc_core.errors import ConfigError
+from bittc_core.parallel import LOCK_FILE, OutputLock, bounded_workers, check_workers
 from sim.sweep.plan import SETTINGS_FILE, SweepSettings, check_settings, plan_runs
 
 BACKENDS = ("local", "ray")
@@ -67,7 +69,7 @@ def prepare_out(out: Path, settings: SweepSettings, resume: bool) -> None:
             )
         if not resume:
             raise SweepError(f"{out} holds this sweep already; resume it, or choose another output folder")
-    elif out.exists() and any(out.iterdir()):
+    elif out.exists() and any(p.name != LOCK_FILE for p in out.iterdir()):
         raise SweepError(f"{out} is not empty and holds no sweep; choose another output folder")
     out.mkdir(parents=True, exist_ok=True)
     write_text_atomic(path, settings.to_json())
@@ -78,8 +80,10 @@ def check_backend(backend: str, ray_address: str | None, workers: int) -> None:
         raise SweepError(f"backend {backend!r}: must be one of {', '.join(BACKENDS)}")
     if ray_address is not None and backend != "ray":
         raise SweepError("a Ray address needs the ray backend")
-    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
-        raise SweepError(f"workers {workers!r}: must be an integer >= 1")
+    try:
+        check_workers(workers)
+    except ConfigError as e:
+        raise SweepError(str(e)) from None
     if backend == "ray":
         try:
             import ray  # noqa: F401
@@ -105,12 +109,18 @@ def run_sweep(
     progress: bool = True,
     command: str = "",
 ) -> SweepOutcome:
-    """Run every planned run not finished yet, then write the tables, plots and report."""
-    from sim.sweep.execute import run_local, run_ray
-
+    """Run every planned run not finished yet, then write the tables, plots and report.
+    ``workers``: at most one per run left to do is started (``bittc_core.parallel``)."""
     settings = normalized(settings)
     cases = check_settings(settings)
     check_backend(backend, ray_address, workers)
+    with OutputLock(out, "--out"):  # a second sweep into this folder is refused while this one runs
+        return _run_locked(settings, cases, out, workers, backend, ray_address, resume, progress, command)
+
+
+def _run_locked(settings, cases, out, workers, backend, ray_address, resume, progress, command) -> SweepOutcome:
+    from sim.sweep.execute import run_local, run_ray
+
     prepare_out(out, settings, resume)
     plan = plan_runs(settings, cases)
     todo = [s for s in plan if _load_summary(out, s) is None]
@@ -129,6 +139,7 @@ def run_sweep(
         bar.update(1)
 
     t0 = time.perf_counter()
+    workers = bounded_workers(workers, len(todo)) if todo else workers
     try:
         if todo:
             if backend == "ray":
@@ -163,7 +174,7 @@ def _write_products(out, settings, cases, plan, outcome, command, workers, backe
         + (f" ({outcome.runs_per_min:.1f} runs/min)." if outcome.runs_per_min else ".")
     ]
     if "measured" in settings.latencies:
-        from sim.sweep.execute import threads_per_worker
+        from bittc_core.parallel import threads_per_worker
 
         notes.append(
             f"Measured latency is the wall-clock time of each estimator call on this machine, with "

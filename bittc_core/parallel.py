@@ -1,0 +1,107 @@
+"""How many worker processes a job starts, and an OS lock on an output folder.
+
+Workers: a pool never gets more workers than tasks, a count above the machine's cores
+is allowed with a warning (each worker then gets one thread: threads x workers stays
+within the cores), and a count above ``max_workers()`` is refused as a typo. Locks: a
+folder that a running ``sweep``, ``generate`` or ``train`` writes into holds a lock file
+``.bittc.lock`` locked with ``fcntl.flock``; a second run into it is refused with the
+holder's process id. The OS drops the lock when its process dies, so a folder left by a
+killed run is never blocked (``--resume`` works after a SIGKILL).
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+from pathlib import Path
+
+from bittc_core.errors import ConfigError
+
+LOCK_FILE = ".bittc.lock"
+
+
+def cpu_count() -> int:
+    return os.cpu_count() or 1
+
+
+def max_workers() -> int:
+    """More worker processes than this is surely a typo: 4 per core, at least 16."""
+    return max(16, 4 * cpu_count())
+
+
+def check_workers(requested, what: str = "workers") -> int:
+    """A worker count in [1, ``max_workers()``]; anything else refused (ConfigError naming it)."""
+    if isinstance(requested, bool) or not isinstance(requested, int) or requested < 1:
+        raise ConfigError(f"{what} {requested!r}: must be an integer >= 1")
+    if requested > max_workers():
+        raise ConfigError(
+            f"{what} {requested}: more than {max_workers()} worker processes on a {cpu_count()}-core machine "
+            "is refused (each is a full process with its own renderer and network)"
+        )
+    return requested
+
+
+def bounded_workers(requested, tasks: int, what: str = "workers") -> int:
+    """-> the worker count to start for ``tasks`` tasks: at most ``tasks``; refused as
+    ``check_workers`` refuses; warned on stderr above the machine's cores."""
+    check_workers(requested, what)
+    if requested > cpu_count():
+        print(
+            f"warning: {what} {requested} on {cpu_count()} cores: the workers share the cores "
+            "(one thread each), so each runs slower and measured latency grows",
+            file=sys.stderr,
+        )
+    n = max(1, min(requested, tasks))
+    if n < requested:
+        print(f"note: {requested} {what} for {tasks} task(s): starting {n}", file=sys.stderr)
+    return n
+
+
+def threads_per_worker(workers: int) -> int:
+    """Torch threads per worker so that threads x workers stays within the cores."""
+    return max(1, cpu_count() // max(workers, 1))
+
+
+class OutputLock:
+    """An exclusive OS lock on ``folder`` for as long as the ``with`` block runs.
+
+    Raises ConfigError naming the holder's process id when another live process holds it."""
+
+    def __init__(self, folder: str | Path, what: str = "output folder", name: str = LOCK_FILE) -> None:
+        self.path = Path(folder) / name
+        self.what = what
+        self._fd: int | None = None
+
+    def __enter__(self) -> OutputLock:
+        return self.acquire()
+
+    def __exit__(self, *exc) -> None:
+        self.release()
+
+    def acquire(self) -> OutputLock:
+        """Take the lock (ConfigError when a live process holds it; OSError when the folder is unwritable)."""
+        import fcntl
+
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            holder = os.pread(fd, 32, 0).decode(errors="replace").strip() or "unknown"
+            os.close(fd)
+            raise ConfigError(
+                f"{self.what} {str(self.path.parent)!r} is in use by a running process (pid {holder}); "
+                "wait for it, or choose another folder"
+            ) from None
+        os.ftruncate(fd, 0)
+        os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
+        self._fd = fd
+        return self
+
+    def release(self) -> None:
+        if self._fd is not None:
+            import fcntl
+
+            fcntl.flock(self._fd, fcntl.LOCK_UN)
+            os.close(self._fd)
+            self._fd = None
