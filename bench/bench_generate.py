@@ -19,7 +19,7 @@ from pathlib import Path
 
 os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
 
-from bittc_core.data.generate import GenerationConfig, generate  # noqa: E402
+from sim.datagen.generate import GenerationConfig, generate  # noqa: E402
 
 
 def timed(cfg: GenerationConfig, n: int, workers: int, backend: str) -> float:

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import sys
 
-from bittc_core.cli.bench_cmd import main
+from sim.cli.bench_cmd import main
 
 if __name__ == "__main__":
     sys.exit(main())

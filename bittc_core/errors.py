@@ -1,7 +1,7 @@
 """Errors that carry a message meant for the user.
 
 Library code raises ``BittcError`` subclasses whose messages name the bad value or field
-(never a command-line flag); only ``bittc_core.cli`` raises ``CliError``, which names the
+(never a command-line flag); only ``sim.cli`` raises ``CliError``, which names the
 flag. ``bittc`` prints either kind without a traceback and exits with status 2."""
 
 
@@ -14,4 +14,4 @@ class ConfigError(BittcError, ValueError):
 
 
 class CliError(BittcError):
-    """A bad command line: the message names the flag (raised by ``bittc_core.cli`` only)."""
+    """A bad command line: the message names the flag (raised by ``sim.cli`` only)."""

@@ -87,8 +87,6 @@ from controllers.base import BrakeCommand, Calibration, Controller, GeofenceView
 from controllers.road import corridor_columns, ground_ttc_per_row, static_depth_m
 from controllers.stages import StageConfig, StagedBrake
 
-COST_FAMILIES = ("bittc", "flow")  # estimators a device profile prices (sim.latency.COST_FAMILIES)
-
 DEFAULT_TAU_RANGE_S = (0.8, 2.8)  # [s] camera-plane TTC spanned by default_thresholds
 MAX_THRESHOLDS = 64  # thresholds per job: the one bound of K (CLI, sweeps, the controller)
 MAX_FRAME_STRIDE = 10  # [frames] the one bound of the frame stride
@@ -213,8 +211,7 @@ class GeofenceController(Controller):
         self.name = name
         self.num_alphas = len(self.cfg.thresholds_s)
         self.frame_stride = self.cfg.frame_stride
-        family = getattr(estimator, "name", None)
-        self.estimator_kind = family if family in COST_FAMILIES else None
+        self.estimator_kind = getattr(estimator, "name", None) or None  # the family a device profile prices
         self.cached_frames = int(getattr(estimator, "cached_frames", 0))
         self._order = np.argsort(self.cfg.thresholds_s)  # fences from the smallest threshold up
         self._thr = np.asarray(self.cfg.thresholds_s, dtype=np.float64)[self._order]

@@ -163,11 +163,33 @@ def expand(raw: Any, src: str) -> list[ScenarioCase]:
 
 
 def _resolve(r: dict, case_name: str, src: str) -> ScenarioCase:
-    name = r["name"]
+    """One expanded case (no lists left) -> a validated ScenarioCase: the top-level fields,
+    the road, the ego, then each actor with its lane change."""
     if not isinstance(r["threat"], bool):
         raise fail(src, "threat", r["threat"], "must be true or false")
     duration = number(src, "duration_s", r.get("duration_s", 12.0), 0.5, 120.0)
-    road_raw = r.get("road") or {}
+    road = _road(r.get("road") or {}, src)
+    ego = EgoSpec(speed_kph=number(src, "ego.speed_kph", r["ego"].get("speed_kph", 50.0), 0.0, 200.0))
+    actors = tuple(_actor(a, f"actors[{i}]", src, road, ego, duration) for i, a in enumerate(r["actors"]))
+    traffic = integer(src, "traffic", r.get("traffic", 0), 0, 12)
+    description = r.get("description", "")
+    if not isinstance(description, str):
+        raise fail(src, "description", description, "must be a string")
+    return ScenarioCase(
+        family=r["name"],
+        name=case_name,
+        description=description,
+        threat=r["threat"],
+        duration_s=duration,
+        road=road,
+        ego=ego,
+        actors=actors,
+        traffic=traffic,
+        source=src,
+    )
+
+
+def _road(road_raw: dict, src: str) -> RoadConfig:
     check_keys(src, "road", road_raw, _ROAD_KEYS - _ROAD_COMPUTED)
     road_kw = {}
     for k, v in road_raw.items():
@@ -181,76 +203,57 @@ def _resolve(r: dict, case_name: str, src: str) -> ScenarioCase:
         else:
             road_kw[k] = number(src, f"road.{k}", v, 0.0, 1e4, lo_open=True)
     try:
-        road = RoadConfig(**road_kw)
+        return RoadConfig(**road_kw)
     except ValueError as e:
         raise ConfigError(f"{src}: road: {e}") from None
-    ego = EgoSpec(speed_kph=number(src, "ego.speed_kph", r["ego"].get("speed_kph", 50.0), 0.0, 200.0))
-    actors = []
-    for i, a in enumerate(r["actors"]):
-        k = f"actors[{i}]"
-        vehicle = a.get("vehicle", "car")
-        if vehicle not in VEHICLE_CLASSES:
-            raise fail(src, f"{k}.vehicle", vehicle, f"unknown vehicle (known: {', '.join(sorted(VEHICLE_CLASSES))})")
-        lane = integer(src, f"{k}.lane", a.get("lane", 0), -road.lanes_right, road.lanes_left)
-        direction = a.get("direction", "same")
-        if direction not in ("same", "oncoming"):
-            raise fail(src, f"{k}.direction", direction, "must be 'same' or 'oncoming'")
-        hs, hm = a.get("headway_s"), a.get("headway_m")
-        if (hs is None) == (hm is None):
-            raise fail(src, f"{k}.headway_s/headway_m", (hs, hm), "give exactly one of them")
-        if hs is not None:
-            number(src, f"{k}.headway_s", hs, 0.0, 60.0, lo_open=True)
-            if ego.speed_kph == 0:
-                raise fail(src, f"{k}.headway_s", hs, "a time headway needs a moving ego (use headway_m)")
-        if hm is not None:
-            number(src, f"{k}.headway_m", hm, 0.0, 500.0, lo_open=True)
-        decel = number(src, f"{k}.decel_mps2", a.get("decel_mps2", 0.0), 0.0, 12.0)
-        accel = number(src, f"{k}.accel_mps2", a.get("accel_mps2", 0.0), 0.0, 6.0)
-        if decel > 0 and accel > 0:
-            raise fail(src, f"{k}.accel_mps2", accel, "cannot be combined with decel_mps2")
-        lc_raw = a.get("lane_change")
-        lc = None
-        if lc_raw is not None:
-            check_keys(src, f"{k}.lane_change", lc_raw, _LC_KEYS)
-            for lk, lv in lc_raw.items():
-                check_not_list(src, f"{k}.lane_change.{lk}", lv)
-            lc = LaneChange(
-                start_s=number(src, f"{k}.lane_change.start_s", lc_raw.get("start_s", 0.0), 0.0, duration),
-                duration_s=number(src, f"{k}.lane_change.duration_s", lc_raw.get("duration_s", 2.0), 0.5, 10.0),
-                to_lane=integer(
-                    src, f"{k}.lane_change.to_lane", lc_raw.get("to_lane", 0), -road.lanes_right, road.lanes_left
-                ),
-            )
-        actors.append(
-            ActorSpec(
-                vehicle=vehicle,
-                lane=lane,
-                direction=direction,
-                speed_kph=number(src, f"{k}.speed_kph", a.get("speed_kph", 0.0), 0.0, 200.0),
-                overlap_pct=number(src, f"{k}.overlap_pct", a.get("overlap_pct", 100.0), -100.0, 100.0),
-                headway_s=None if hs is None else float(hs),
-                headway_m=None if hm is None else float(hm),
-                decel_mps2=decel,
-                brake_onset_s=number(src, f"{k}.brake_onset_s", a.get("brake_onset_s", 0.0), 0.0, duration),
-                accel_mps2=accel,
-                lane_change=lc,
-            )
-        )
-    traffic = integer(src, "traffic", r.get("traffic", 0), 0, 12)
-    description = r.get("description", "")
-    if not isinstance(description, str):
-        raise fail(src, "description", description, "must be a string")
-    return ScenarioCase(
-        family=name,
-        name=case_name,
-        description=description,
-        threat=r["threat"],
-        duration_s=duration,
-        road=road,
-        ego=ego,
-        actors=tuple(actors),
-        traffic=traffic,
-        source=src,
+
+
+def _actor(a: dict, k: str, src: str, road: RoadConfig, ego: EgoSpec, duration: float) -> ActorSpec:
+    vehicle = a.get("vehicle", "car")
+    if vehicle not in VEHICLE_CLASSES:
+        raise fail(src, f"{k}.vehicle", vehicle, f"unknown vehicle (known: {', '.join(sorted(VEHICLE_CLASSES))})")
+    lane = integer(src, f"{k}.lane", a.get("lane", 0), -road.lanes_right, road.lanes_left)
+    direction = a.get("direction", "same")
+    if direction not in ("same", "oncoming"):
+        raise fail(src, f"{k}.direction", direction, "must be 'same' or 'oncoming'")
+    hs, hm = a.get("headway_s"), a.get("headway_m")
+    if (hs is None) == (hm is None):
+        raise fail(src, f"{k}.headway_s/headway_m", (hs, hm), "give exactly one of them")
+    if hs is not None:
+        number(src, f"{k}.headway_s", hs, 0.0, 60.0, lo_open=True)
+        if ego.speed_kph == 0:
+            raise fail(src, f"{k}.headway_s", hs, "a time headway needs a moving ego (use headway_m)")
+    if hm is not None:
+        number(src, f"{k}.headway_m", hm, 0.0, 500.0, lo_open=True)
+    decel = number(src, f"{k}.decel_mps2", a.get("decel_mps2", 0.0), 0.0, 12.0)
+    accel = number(src, f"{k}.accel_mps2", a.get("accel_mps2", 0.0), 0.0, 6.0)
+    if decel > 0 and accel > 0:
+        raise fail(src, f"{k}.accel_mps2", accel, "cannot be combined with decel_mps2")
+    return ActorSpec(
+        vehicle=vehicle,
+        lane=lane,
+        direction=direction,
+        speed_kph=number(src, f"{k}.speed_kph", a.get("speed_kph", 0.0), 0.0, 200.0),
+        overlap_pct=number(src, f"{k}.overlap_pct", a.get("overlap_pct", 100.0), -100.0, 100.0),
+        headway_s=None if hs is None else float(hs),
+        headway_m=None if hm is None else float(hm),
+        decel_mps2=decel,
+        brake_onset_s=number(src, f"{k}.brake_onset_s", a.get("brake_onset_s", 0.0), 0.0, duration),
+        accel_mps2=accel,
+        lane_change=_lane_change(a.get("lane_change"), k, src, road, duration),
+    )
+
+
+def _lane_change(lc_raw, k: str, src: str, road: RoadConfig, duration: float) -> LaneChange | None:
+    if lc_raw is None:
+        return None
+    check_keys(src, f"{k}.lane_change", lc_raw, _LC_KEYS)
+    for lk, lv in lc_raw.items():
+        check_not_list(src, f"{k}.lane_change.{lk}", lv)
+    return LaneChange(
+        start_s=number(src, f"{k}.lane_change.start_s", lc_raw.get("start_s", 0.0), 0.0, duration),
+        duration_s=number(src, f"{k}.lane_change.duration_s", lc_raw.get("duration_s", 2.0), 0.5, 10.0),
+        to_lane=integer(src, f"{k}.lane_change.to_lane", lc_raw.get("to_lane", 0), -road.lanes_right, road.lanes_left),
     )
 
 

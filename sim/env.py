@@ -269,7 +269,7 @@ class GeofenceObservation(gym.Wrapper):
             fork = getattr(self.estimator, "fork", None)
             self._views["fovea_geofence"] = ("fovea_image_prev", "fovea_image", fork() if fork else self.estimator)
         base.views = len(self._views)
-        base.estimator_kind = self.estimator.name if self.estimator.name in ("bittc", "flow") else None
+        base.estimator_kind = getattr(self.estimator, "name", None) or None
         base.cached_frames = int(getattr(self.estimator, "cached_frames", 0))
         k, h, w = len(thr), base.camera.height_px, base.camera.width_px
         maps = spaces.Box(0.0, 1.0, (k, h, w), np.float32)

@@ -5,7 +5,7 @@ A profile file is one YAML mapping::
 
     name: my-laptop              # a label (the file is named by its path in outputs)
     bittc: {extract_ms: 4.1, view_ms: 1.9, threshold_ms: 2.3, job_ms: 0.4}   # cost terms [ms]
-    flow: {extract_ms: 0.0, view_ms: 2.1, threshold_ms: 0.1, job_ms: 0.3}     # (sim.latency)
+    flow: {extract_ms: 0.0, view_ms: 2.1, threshold_ms: 0.1, job_ms: 0.3}     # (sim.cost_model)
     continuous_ms: 76.0          # [ms] one continuous-TTC call of the network
     measured: true
     source: "..."                # how it was made, in words
@@ -32,7 +32,7 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from sim.latency import COST_FAMILIES, COST_TERMS, CostTerms, DeviceProfile, JobWork, LatencyError, parse_costs
+from sim.cost_model import COST_FAMILIES, COST_TERMS, CostTerms, DeviceProfile, JobWork, LatencyError, parse_costs
 
 REQUIRED = ("name", "measured", "source", "timings_ms", "backend", "size_px", "threads", "date")
 OPTIONAL = ("continuous_ms", "fit", "weights", "machine", "versions", *COST_FAMILIES)

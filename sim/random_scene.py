@@ -149,10 +149,48 @@ def render_clip(
     (``_ahead_actor``; the ego then drives at 10-130 km/h, with at most
     ``AHEAD_MAX_OTHER_ACTORS`` random actors). At 0 nothing more is drawn, so the bytes
     are those of the datasets made before the option.
+
+    Steps, each drawing from the one ``rng`` in this order: the scene (camera, road, ego),
+    the world, the actors, the frames; then the ground truth and the metadata.
     """
     if world is not None and world.bank is not bank:
         raise ValueError("render_clip: the world must use the given texture bank")
     rng = np.random.default_rng(sample_seed)
+    scene = _draw_scene(rng, base_camera, ahead_share)
+    hw_road = build_road(scene.road, seed=sample_seed % (2**31))
+    n_sub, sim_dt = substeps(scene.camera.dt_s)
+    ego = EgoVehicle(hw_road, 0.0, 0.0, scene.v_ego, EGO_SIZE_M[0], EGO_SIZE_M[1], ActuatorConfig(delay_s=0.0), sim_dt)
+    hw_road.vehicles.append(ego)
+    world_seed = int(rng.integers(2**31))
+    owned = world is None
+    if owned:
+        world = World(scene.camera, scene.road, seed=world_seed, bank=bank)
+    else:
+        world.reset(scene.camera, scene.road, seed=world_seed)
+    try:
+        actors = _place_actors(rng, world, hw_road, scene)
+        images, frames, states = _render_frames(rng, world, hw_road, ego, actors, scene, clip_length, n_sub, sim_dt)
+        view = scene.camera.wide()
+        gts = [
+            pair_ground_truth(view, r1.depth_m, r1.instance, c1, c0, p1, p0, scene.camera.dt_s)
+            for (_, c0, p0), (r1, c1, p1) in zip(frames[:-1], frames[1:])
+        ]
+    finally:
+        if owned:
+            world.close()
+    return Clip(images, gts, _clip_meta(sample_seed, scene, actors, states))
+
+
+@dataclass(frozen=True)
+class _Scene:
+    camera: CameraConfig
+    road: RoadConfig
+    v_ego: float  # [m/s]
+    ego_decel: float  # [m/s^2]
+    ahead: bool  # a braking case ahead
+
+
+def _draw_scene(rng: np.random.Generator, base_camera: CameraConfig, ahead_share: float) -> _Scene:
     camera = random_camera(rng, base_camera)
     road = random_road(rng)
     v_ego = 0.0 if rng.random() < 0.08 else float(rng.uniform(0.0, EGO_MAX_SPEED_MPS))
@@ -160,89 +198,90 @@ def render_clip(
     ahead = ahead_share > 0 and rng.random() < ahead_share
     if ahead:
         v_ego = float(rng.uniform(*AHEAD_EGO_SPEED_MPS))
-    hw_road = build_road(road, seed=sample_seed % (2**31))
-    n_sub, sim_dt = substeps(camera.dt_s)
-    ego = EgoVehicle(hw_road, 0.0, 0.0, v_ego, EGO_SIZE_M[0], EGO_SIZE_M[1], ActuatorConfig(delay_s=0.0), sim_dt)
-    hw_road.vehicles.append(ego)
-    world_seed = int(rng.integers(2**31))
-    owned = world is None
-    if owned:
-        world = World(camera, road, seed=world_seed, bank=bank)
-    else:
-        world.reset(camera, road, seed=world_seed)
-    try:
-        actors = []
-        taken = [footprint_corners(0.0, 0.0, 0.0, EGO_SIZE_M[0] + 2.0, EGO_SIZE_M[1] + 1.0)]
-        if ahead:
-            spec = sample_spec(rng, str(rng.choice(AHEAD_CLASSES)))
-            x, y, heading, speed, accel, motion = _ahead_actor(rng, v_ego, spec.length_m, spec.width_m)
-            taken.append(footprint_corners(x, y, heading, spec.length_m + 1.0, spec.width_m + 0.5))
-            veh = ScriptedVehicle(hw_road, x, y, heading, speed, spec.length_m, spec.width_m, accel_mps2=accel)
-            hw_road.vehicles.append(veh)
-            actors.append((world.add_vehicle(spec), spec, veh, motion))
-        for _ in range(int(rng.integers(0, (AHEAD_MAX_OTHER_ACTORS if ahead else MAX_ACTORS) + 1))):
-            motion = str(rng.choice(MOTIONS))
-            spec = sample_spec(rng, str(rng.choice(CLASSES)))
-            for _attempt in range(5):
-                x, y, heading, speed, accel, keep = _actor_motion(rng, motion, road, v_ego)
-                corners = footprint_corners(x, y, heading, spec.length_m + 1.0, spec.width_m + 0.5)
-                if not any(footprints_overlap(corners, t) for t in taken):
-                    break
-            else:
-                continue
-            taken.append(corners)
-            veh = ScriptedVehicle(
-                hw_road, x, y, heading, speed, spec.length_m, spec.width_m, accel_mps2=accel, keep_lateral=keep
-            )
-            hw_road.vehicles.append(veh)
-            actors.append((world.add_vehicle(spec), spec, veh, motion))
-        images, frames, states = [], [], []
-        t = 0.0
-        for k in range(clip_length):
-            if k > 0:
-                for _ in range(n_sub):
-                    step_traffic(hw_road, ego, [veh for _, _, veh, _ in actors], ego_decel, t, sim_dt)
-                    t += sim_dt
-            poses = {inst: veh.world_pose() for inst, _, veh, _ in actors}
-            for inst, pose in poses.items():
-                world.set_vehicle_pose(inst, *pose)
-            ex, ey, eh = ego.world_pose()
-            cam_T_world = capture_pose(camera, rng, (ex, ey, eh))
-            r = world.render(cam_T_world)
-            images.append(r.rgb)
-            frames.append((r, cam_T_world, poses))
-            states.append(
-                {
-                    "t_s": round(t, 6),
-                    "cam_T_world": np.round(cam_T_world, 12).tolist(),
-                    "ego": {"x_m": ex, "y_m": ey, "heading_rad": eh, "speed_mps": float(ego.speed)},
-                    "actors": [
-                        {
-                            "instance": inst,
-                            "x_m": poses[inst][0],
-                            "y_m": poses[inst][1],
-                            "heading_rad": poses[inst][2],
-                            "speed_mps": float(veh.speed),
-                        }
-                        for inst, _, veh, _ in actors
-                    ],
-                }
-            )
-        gts = []
-        for j in range(1, clip_length):
-            (_, c0, p0), (r1, c1, p1) = frames[j - 1], frames[j]
-            gts.append(pair_ground_truth(camera.wide(), r1.depth_m, r1.instance, c1, c0, p1, p0, camera.dt_s))
-    finally:
-        if owned:
-            world.close()
+    return _Scene(camera, road, v_ego, ego_decel, ahead)
+
+
+def _place_actors(rng, world: World, hw_road, scene: _Scene) -> list:
+    """-> [(instance, spec, vehicle, motion)]: the braking case ahead (if drawn), then random
+    actors placed clear of the ego and of each other (5 tries each)."""
+    actors = []
+    taken = [footprint_corners(0.0, 0.0, 0.0, EGO_SIZE_M[0] + 2.0, EGO_SIZE_M[1] + 1.0)]
+    if scene.ahead:
+        spec = sample_spec(rng, str(rng.choice(AHEAD_CLASSES)))
+        x, y, heading, speed, accel, motion = _ahead_actor(rng, scene.v_ego, spec.length_m, spec.width_m)
+        taken.append(footprint_corners(x, y, heading, spec.length_m + 1.0, spec.width_m + 0.5))
+        veh = ScriptedVehicle(hw_road, x, y, heading, speed, spec.length_m, spec.width_m, accel_mps2=accel)
+        hw_road.vehicles.append(veh)
+        actors.append((world.add_vehicle(spec), spec, veh, motion))
+    for _ in range(int(rng.integers(0, (AHEAD_MAX_OTHER_ACTORS if scene.ahead else MAX_ACTORS) + 1))):
+        motion = str(rng.choice(MOTIONS))
+        spec = sample_spec(rng, str(rng.choice(CLASSES)))
+        for _attempt in range(5):
+            x, y, heading, speed, accel, keep = _actor_motion(rng, motion, scene.road, scene.v_ego)
+            corners = footprint_corners(x, y, heading, spec.length_m + 1.0, spec.width_m + 0.5)
+            if not any(footprints_overlap(corners, t) for t in taken):
+                break
+        else:
+            continue
+        taken.append(corners)
+        veh = ScriptedVehicle(
+            hw_road, x, y, heading, speed, spec.length_m, spec.width_m, accel_mps2=accel, keep_lateral=keep
+        )
+        hw_road.vehicles.append(veh)
+        actors.append((world.add_vehicle(spec), spec, veh, motion))
+    return actors
+
+
+def _render_frames(rng, world: World, hw_road, ego, actors, scene: _Scene, clip_length, n_sub, sim_dt):
+    """-> (images, (render, cam_T_world, poses) per frame, the per-frame state records)."""
+    images, frames, states = [], [], []
+    t = 0.0
+    for k in range(clip_length):
+        if k > 0:
+            for _ in range(n_sub):
+                step_traffic(hw_road, ego, [veh for _, _, veh, _ in actors], scene.ego_decel, t, sim_dt)
+                t += sim_dt
+        poses = {inst: veh.world_pose() for inst, _, veh, _ in actors}
+        for inst, pose in poses.items():
+            world.set_vehicle_pose(inst, *pose)
+        ex, ey, eh = ego.world_pose()
+        cam_T_world = capture_pose(scene.camera, rng, (ex, ey, eh))
+        r = world.render(cam_T_world)
+        images.append(r.rgb)
+        frames.append((r, cam_T_world, poses))
+        states.append(
+            {
+                "t_s": round(t, 6),
+                "cam_T_world": np.round(cam_T_world, 12).tolist(),
+                "ego": {"x_m": ex, "y_m": ey, "heading_rad": eh, "speed_mps": float(ego.speed)},
+                "actors": [
+                    {
+                        "instance": inst,
+                        "x_m": poses[inst][0],
+                        "y_m": poses[inst][1],
+                        "heading_rad": poses[inst][2],
+                        "speed_mps": float(veh.speed),
+                    }
+                    for inst, _, veh, _ in actors
+                ],
+            }
+        )
+    return images, frames, states
+
+
+def _clip_meta(sample_seed: int, scene: _Scene, actors, states) -> dict:
+    camera = scene.camera
     fx, fy, cx, cy = camera.intrinsics()
-    meta = {
+    cam = asdict(camera)
+    if cam["fovea_zoom"] is None:  # random scenes have one view: their bytes stay those of the earlier datasets
+        del cam["fovea_zoom"]
+    return {
         "sample_seed": int(sample_seed),
         "intrinsics": {"fx_px": fx, "fy_px": fy, "cx_px": cx, "cy_px": cy},
         "dt_s": camera.dt_s,
-        "camera": asdict(camera),
-        "road": asdict(road),
-        "ego_decel_mps2": ego_decel,
+        "camera": cam,
+        "road": asdict(scene.road),
+        "ego_decel_mps2": scene.ego_decel,
         "actors": [
             {
                 "instance": inst,
@@ -257,4 +296,3 @@ def render_clip(
         ],
         "frames": states,
     }
-    return Clip(images, gts, meta)

@@ -43,7 +43,7 @@ def test_settings_need_a_warmup_round():
     "size, needle", [("95x288", "multiples of 3"), ("96by288", "expected HxW"), ("9x288", "height must be in")]
 )
 def test_bench_refuses_a_bad_size_before_timing(size, needle, capsys):
-    from bittc_core.cli import main
+    from sim.cli import main
 
     assert main(["bench", "--size", size, "--calls", "1"]) == 2
     captured = capsys.readouterr()
@@ -52,7 +52,7 @@ def test_bench_refuses_a_bad_size_before_timing(size, needle, capsys):
 
 
 def test_bench_times_the_size_it_is_given(capsys):
-    from bittc_core.cli import main
+    from sim.cli import main
 
     assert main(["bench", "--config", "tiny", "--size", "48x96", "--calls", "1", "--threads", "1"]) == 0
     assert "48x96 px" in capsys.readouterr().out
@@ -61,7 +61,7 @@ def test_bench_times_the_size_it_is_given(capsys):
 def test_bench_fovea_writes_one_row_per_job(tmp_path, capsys):
     import json
 
-    from bittc_core.cli import main
+    from sim.cli import main
 
     out = tmp_path / "bench.json"
     assert main(["bench", "--fovea", "off", "4", "--calls", "1", "--out", str(out)]) == 0

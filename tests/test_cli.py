@@ -7,7 +7,7 @@ import sys
 
 import pytest
 
-from bittc_core.cli import main
+from sim.cli import main
 
 
 def test_run_writes_documented_outputs(tmp_path, capsys):
@@ -86,9 +86,7 @@ def test_readonly_out(tmp_path, capsys):
 
 
 def test_console_script_lists_scenarios():
-    r = subprocess.run(
-        [sys.executable, "-m", "bittc_core.cli", "scenarios"], capture_output=True, text=True, check=True
-    )
+    r = subprocess.run([sys.executable, "-m", "sim.cli", "scenarios"], capture_output=True, text=True, check=True)
     assert "CCRs" in r.stdout and "benign-free-road" in r.stdout
 
 

@@ -5,9 +5,9 @@ import argparse
 
 import pytest
 
-from bittc_core.cli import build_parser, main
-from bittc_core.cli.common import MAX_SEED, TTA_MODES, check_seed, flag_error
 from bittc_core.errors import CliError, ConfigError
+from sim.cli import build_parser, main
+from sim.cli.common import MAX_SEED, TTA_MODES, check_seed, flag_error
 
 
 def _walk(parser, path=("bittc",)):
@@ -59,8 +59,8 @@ def _option(command: str, flag: str):
 def test_enumerated_options_without_choices_list_their_values_in_the_help():
     import controllers
     import scenarios
-    from bittc_core.cli.train_cmd import STAGE_CHOICES
     from bittc_core.model import CONFIGS
+    from sim.cli.train_cmd import STAGE_CHOICES
     from sim.textures import GROUND_STYLES, VEHICLE_STYLES
 
     expected = [(c, "--ground-texture", GROUND_STYLES) for c in ("run", "suite", "generate")]
@@ -113,7 +113,7 @@ def test_a_seed_out_of_range_is_refused_by_every_subcommand(tmp_path, capsys, ar
 
 
 def test_train_refuses_a_seed_out_of_range():
-    from bittc_core.cli import train_cmd
+    from sim.cli import train_cmd
 
     args = build_parser().parse_args(
         ["train", "--data", "synthetic", "--config", "tiny", "--out", "m.pt", "--seed", str(MAX_SEED + 1)]
@@ -133,7 +133,7 @@ def test_flag_error_names_the_flag_of_a_leading_field():
 
 
 def test_eval_refuses_to_replace_its_default_output(tmp_path, monkeypatch, capsys):
-    from bittc_core.cli import eval_cmd
+    from sim.cli import eval_cmd
 
     monkeypatch.chdir(tmp_path)
     argv = ["eval", "--data", "synthetic", "--method", "oracle", "--split", "val"]
@@ -148,7 +148,7 @@ def test_eval_refuses_to_replace_its_default_output(tmp_path, monkeypatch, capsy
 
 
 def test_bench_refuses_a_config_with_weights():
-    from bittc_core.cli import bench_cmd
+    from sim.cli import bench_cmd
 
     args = build_parser().parse_args(["bench", "--config", "tiny", "--weights", "w.pt"])
     with pytest.raises(CliError, match="--config 'tiny' with --weights"):

@@ -10,9 +10,9 @@ import pytest
 
 import controllers
 import scenarios
-from bittc_core.cli import main
 from bittc_core.errors import ConfigError
 from sim.camera import CameraConfig
+from sim.cli import main
 from sim.latency import parse_latency
 from sim.runner import run_case
 
@@ -55,7 +55,7 @@ def test_the_example_controller_runs(tmp_path):
         [
             sys.executable,
             "-m",
-            "bittc_core.cli",
+            "sim.cli",
             "run",
             "CCRs-30",
             "--controller",

@@ -6,7 +6,6 @@ import pytest
 import torch
 
 from bittc_core.checkpoint import make_payload, save_checkpoint
-from bittc_core.cli import train_cmd
 from bittc_core.errors import CliError
 from bittc_core.model import BinaryTTCNet, get_config
 from bittc_core.model.flip import flip_views, merge_flip_views
@@ -14,6 +13,7 @@ from bittc_core.train import TrainConfig
 from bittc_core.train.distill import flip_averaged_logits
 from bittc_core.train.losses import masked_bce
 from bittc_core.train.targets import sample_eta, sample_shifts_px, valid_mask
+from sim.cli import train_cmd
 from tests import train_helpers
 from tests.train_helpers import cli_args, fit_fixed_batch
 

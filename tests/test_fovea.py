@@ -6,10 +6,10 @@ import math
 import numpy as np
 import pytest
 
-from bittc_core.cli import main
 from controllers.base import Calibration
 from controllers.road import ground_depth_per_row
 from sim.camera import CameraConfig, cam_T_ego
+from sim.cli import main
 from sim.scenery import RoadConfig
 from sim.vehicles import EGO_SIZE_M
 from sim.world import World

@@ -12,10 +12,10 @@ import numpy as np
 import pytest
 import torch
 
-from bittc_core.cli import main
 from bittc_core.data.dataset import TTCDataset
 from bittc_core.data.format import read_sample
-from bittc_core.data.generate import GenerationConfig, generate
+from sim.cli import main
+from sim.datagen.generate import GenerationConfig, generate
 
 SMALL = GenerationConfig(seed=3, height_px=48, width_px=144)
 
@@ -44,7 +44,7 @@ def test_killed_run_resumes_to_the_same_dataset(tmp_path):
     argv = ["--samples", "10", "--seed", "3", "--size", "48x144", "--no-progress"]
     generate(ref, SMALL, "train", 10, workers=1, backend="local", progress=False)
     proc = subprocess.Popen(
-        [sys.executable, "-m", "bittc_core.cli", "generate", "--out", str(killed), *argv],
+        [sys.executable, "-m", "sim.cli", "generate", "--out", str(killed), *argv],
         stdout=subprocess.DEVNULL,
         stderr=subprocess.DEVNULL,
         start_new_session=True,
@@ -231,7 +231,7 @@ def test_braking_cases_ahead(tmp_path):
 
 
 def test_steady_rate_is_reported_only_over_a_long_enough_window(tmp_path):
-    from bittc_core.data.generate import steady_rate
+    from sim.datagen.generate import steady_rate
 
     # 24 samples on 2 workers in chunks of 4: after each worker's first chunk the other
     # 16 results arrive in one burst, a window of almost no time

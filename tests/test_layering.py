@@ -86,7 +86,7 @@ def test_library_code_neither_raises_cli_errors_nor_names_flags():
             if (
                 isinstance(node, ast.ImportFrom)
                 and node.module
-                and (node.module.startswith("bittc_core.cli") or any(a.name == "CliError" for a in node.names))
+                and (node.module.startswith("sim.cli") or any(a.name == "CliError" for a in node.names))
             ):
                 found.append(f"{rel}:{node.lineno}: imports from {node.module}")
         found += [f"{rel}:{line}: {text!r}" for line, text in _raised_strings(tree) if FLAG.search(text)]
@@ -94,8 +94,8 @@ def test_library_code_neither_raises_cli_errors_nor_names_flags():
 
 
 def test_generation_config_names_the_field_and_the_cli_the_flag(tmp_path, capsys):
-    from bittc_core.cli import main
-    from bittc_core.data.generate import GenerationConfig
+    from sim.cli import main
+    from sim.datagen.generate import GenerationConfig
 
     for kw, field in (
         (dict(seed=-1), "seed -1"),
@@ -110,7 +110,7 @@ def test_generation_config_names_the_field_and_the_cli_the_flag(tmp_path, capsys
 
 
 def test_the_cli_prints_a_library_error_on_one_line_and_exits_2(tmp_path, capsys):
-    from bittc_core.cli import main
+    from sim.cli import main
 
     missing = tmp_path / "missing.yaml"
     assert main(["run", str(missing), "--controller", "oracle", "--out", str(tmp_path / "o")]) == 2
@@ -133,3 +133,89 @@ def test_one_module_converts_between_tau_and_eta():
     assert tau_to_eta(float("inf"), 0.1) == 1.0 and tau_to_eta(0.9, 0.1) == pytest.approx(0.9)
     assert torch.equal(tau_to_eta(torch.tensor([np.inf, 0.9]), 0.1), torch.tensor([1.0, 0.9]))
     np.testing.assert_allclose(eta_to_tau(eta[:2], 0.1), [0.5, np.inf])
+
+
+# --- one-way layers ----------------------------------------------------------------------
+#: layer -> what its modules may import of ours (a layer above may import every layer below)
+LAYERS = {
+    "bittc_core": {"bittc_core"},
+    "scenarios": {"bittc_core", "scenarios"},
+    "controllers": {"bittc_core", "scenarios", "controllers"},
+    "sim": {"bittc_core", "scenarios", "controllers", "sim"},
+    "sim.cli": {"bittc_core", "scenarios", "controllers", "sim", "sim.cli"},
+}
+OURS = ("bittc_core", "scenarios", "controllers", "sim")
+
+
+def _module(path: Path) -> str:
+    parts = list(path.relative_to(ROOT).with_suffix("").parts)
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+def _layer(module: str) -> str:
+    return "sim.cli" if module == "sim.cli" or module.startswith("sim.cli.") else module.split(".")[0]
+
+
+def _imports(path: Path) -> list[tuple[int, str]]:
+    """(line, module) of every import of ours in the file, lazy ones inside functions too."""
+    out = []
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.Import):
+            out += [(node.lineno, a.name) for a in node.names]
+        elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+            out.append((node.lineno, node.module))
+    return [(n, m) for n, m in out if m.split(".")[0] in OURS]
+
+
+def test_no_import_runs_back_up_a_layer():
+    bad = []
+    for d in OURS:
+        for path in sorted((ROOT / d).rglob("*.py")):
+            layer = _layer(_module(path))
+            for line, mod in _imports(path):
+                if _layer(mod) not in LAYERS[layer]:
+                    bad.append(f"{path.relative_to(ROOT)}:{line} ({layer}) imports {mod}")
+    assert not bad, "imports that run back up a layer:\n" + "\n".join(bad)
+
+
+def test_the_layering_test_sees_a_bad_import(tmp_path):
+    """The rule above on a made-up file of the network library importing the simulator."""
+    fake = ROOT / "bittc_core" / "_layering_probe.py"
+    fake.write_text("def f():\n    from sim.world import World\n")
+    try:
+        with pytest.raises(AssertionError, match="bittc_core/_layering_probe.py:2"):
+            test_no_import_runs_back_up_a_layer()
+    finally:
+        fake.unlink()
+
+
+def test_the_network_and_the_estimators_import_nothing_above_them():
+    code = (
+        "import bittc_core.model, bittc_core.estimator, sys; "
+        "print([m for m in sys.modules if m.split('.')[0] in ('sim','controllers','scenarios')])"
+    )
+    assert _imported(code) == "[]"
+
+
+def test_no_import_cycle_between_sim_modules():
+    """A module-level or lazy import cycle inside sim (latency and its profile files, say)."""
+    graph = {}
+    for path in sorted((ROOT / "sim").rglob("*.py")):
+        me = _module(path)
+        graph[me] = {m for _, m in _imports(path) if m.startswith("sim.") and m != me}
+    cycles = []
+
+    def visit(node, stack):
+        for nxt in sorted(graph.get(node, ())):
+            if nxt in stack:
+                cycles.append(" -> ".join([*stack[stack.index(nxt) :], nxt]))
+            elif nxt not in seen:
+                seen.add(nxt)
+                visit(nxt, [*stack, nxt])
+
+    seen = set()
+    for start in sorted(graph):
+        if start not in seen:
+            seen.add(start)
+            visit(start, [start])
+    assert not cycles, "\n".join(cycles)

@@ -3,11 +3,11 @@
 import pytest
 import torch
 
-from bittc_core.cli import train_cmd
 from bittc_core.errors import CliError
 from bittc_core.model import BinaryTTCNet, get_config
 from bittc_core.train import TrainConfig
 from bittc_core.train.params import param_groups
+from sim.cli import train_cmd
 from tests.train_helpers import cli_args, fit_fixed_batch, make_trainer
 
 

@@ -187,7 +187,7 @@ def test_eval_of_the_oracle_is_perfect_and_writes_json(tmp_path):
     import argparse
     import json
 
-    from bittc_core.cli import eval_cmd
+    from sim.cli import eval_cmd
 
     out = tmp_path / "o.json"
     a = argparse.Namespace(
@@ -226,7 +226,7 @@ def test_eval_of_the_oracle_is_perfect_and_writes_json(tmp_path):
 
 
 def test_eval_tta_modes_match_the_estimator():
-    from bittc_core.cli import eval_cmd
     from bittc_core.estimator import METHODS, TTA_MODES
+    from sim.cli import eval_cmd
 
     assert eval_cmd.TTA_MODES == TTA_MODES and eval_cmd.METHODS == METHODS

@@ -8,9 +8,9 @@ from pathlib import Path
 
 import pytest
 
-from bittc_core.cli import main
 from bittc_core.errors import ConfigError
 from bittc_core.parallel import LOCK_FILE, OutputLock, bounded_workers, max_workers
+from sim.cli import main
 
 ROOT = Path(__file__).resolve().parents[1]
 IMPOSSIBLE = "/proc/bittc-cannot-write-here"

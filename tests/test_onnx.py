@@ -15,12 +15,12 @@ pytest.importorskip("onnxruntime")
 pytest.importorskip("onnxscript")
 
 from bittc_core.checkpoint import DEFAULT_WEIGHTS, make_payload, save_checkpoint  # noqa: E402
-from bittc_core.cli import main  # noqa: E402
 from bittc_core.estimator import make_estimator  # noqa: E402
 from bittc_core.export.manifest import MANIFEST, ExportError, read_manifest  # noqa: E402
 from bittc_core.export.onnx_export import export_onnx  # noqa: E402
 from bittc_core.export.parity import Agreement  # noqa: E402
 from bittc_core.model import BinaryTTCNet, get_config  # noqa: E402
+from sim.cli import main  # noqa: E402
 
 SIZE = (24, 48)  # (H, W) of the tiny network's test frames
 

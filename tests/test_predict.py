@@ -6,9 +6,9 @@ import cv2
 import numpy as np
 import pytest
 
-from bittc_core.cli import main
-from bittc_core.cli.predict_cmd import OUTPUT_FILES, geofence_overlay
 from bittc_core.estimator import make_estimator
+from sim.cli import main
+from sim.cli.predict_cmd import OUTPUT_FILES, geofence_overlay
 
 
 @pytest.fixture(scope="module")
@@ -124,7 +124,7 @@ def big_pair(tmp_path_factory):
 
 
 def test_predict_fovea_is_the_native_centre_crop(big_pair, tmp_path):
-    from bittc_core.cli.predict_cmd import fovea_box
+    from sim.cli.predict_cmd import fovea_box
 
     out = tmp_path / "pred"
     argv = ["predict", str(big_pair / "prev.png"), str(big_pair / "latest.png"), "--size", "96x288"]

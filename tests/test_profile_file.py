@@ -7,7 +7,7 @@ import csv
 import pytest
 import yaml
 
-from bittc_core.cli import main
+from sim.cli import main
 from sim.latency import CostTerms, JobWork, LatencyError, named_profiles, parse_latency
 from sim.profile_file import fit_cost_terms, read_profile_file
 

@@ -5,9 +5,9 @@ import json
 import numpy as np
 
 import scenarios
-from bittc_core.cli import main
 from sim import scenario_eval
 from sim.camera import CameraConfig
+from sim.cli import main
 
 
 class Silent:

@@ -12,8 +12,8 @@ from pathlib import Path
 
 import pytest
 
-from bittc_core.cli import main
 from bittc_core.errors import ConfigError
+from sim.cli import main
 from sim.sweep import ncap
 from sim.sweep.plan import SweepSettings, check_settings, plan_runs
 from sim.sweep.sweep import run_sweep
@@ -208,7 +208,7 @@ def test_resume_after_a_kill_gives_the_same_results(tiny, tmp_path):
     cut = tmp_path / "cut"
     env = dict(os.environ, SDL_VIDEODRIVER="dummy")
     proc = subprocess.Popen(
-        [sys.executable, "-m", "bittc_core.cli", "sweep", *args, "--out", str(cut)],
+        [sys.executable, "-m", "sim.cli", "sweep", *args, "--out", str(cut)],
         env=env,
         stdout=subprocess.DEVNULL,
         stderr=subprocess.DEVNULL,

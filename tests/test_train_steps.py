@@ -6,13 +6,13 @@ import dataclasses
 import pytest
 import torch
 
-from bittc_core.cli import train_cmd
 from bittc_core.errors import CliError
 from bittc_core.metrics import class_counts, two_class_iou
 from bittc_core.train import TrainConfig
 from bittc_core.train.losses import lovasz_two_class, masked_bce
 from bittc_core.train.targets import PIXEL_THRESHOLD_JITTER, eta_labels, sample_eta_at_pixels, shift_labels
 from bittc_core.ttc import tau_to_eta
+from sim.cli import train_cmd
 from tests.train_helpers import cli_args, fit_fixed_batch, make_trainer
 
 

@@ -5,8 +5,8 @@ import torch
 
 from bittc_core.checkpoint import CheckpointError, load_checkpoint, make_payload, save_checkpoint
 from bittc_core.checkpoint_ops import average_checkpoints, zero_layers
-from bittc_core.cli import main
 from bittc_core.model import BinaryTTCNet, get_config
+from sim.cli import main
 
 
 def saved(path, name, seed):

@@ -51,7 +51,7 @@ def fit_fixed_batch(tr: Trainer, batch: dict, steps: int) -> list[float]:
 
 def cli_args(tmp_path, *extra) -> argparse.Namespace:
     """``bittc train`` arguments for a 2-step run of ``tiny`` on the synthetic pairs, plus ``extra``."""
-    from bittc_core.cli import train_cmd
+    from sim.cli import train_cmd
 
     parser = argparse.ArgumentParser()
     train_cmd.add_parser(parser.add_subparsers())

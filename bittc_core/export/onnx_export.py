@@ -89,12 +89,11 @@ def _io(values, names, dynamic) -> list[dict]:
 def export_onnx(
     weights: str | Path, out: str | Path, *, height_px: int | None = None, width_px: int | None = None
 ) -> dict:
-    """Export ``weights`` into the folder ``out``; -> the manifest."""
+    """Export ``weights`` into the folder ``out``; -> the manifest. Steps: check the folder,
+    export and check each graph into a private temporary folder, write the manifest, swap
+    the folder in whole."""
     require_onnx()
-    import onnx
-    import torch
-
-    from bittc_core.checkpoint import build_network, load_checkpoint, release_name
+    from bittc_core.checkpoint import build_network, load_checkpoint
     from bittc_core.export.graphs import GRAPHS
 
     out = Path(out)
@@ -102,83 +101,97 @@ def export_onnx(
         raise ExportError(f"{str(out)!r}: exists and is not an ONNX export folder; choose another folder")
     ckpt = load_checkpoint(weights, map_location="cpu")
     net = build_network(ckpt).eval()
-    cfg = ckpt["model_config"]
     h, w = height_px or DEFAULT_SIZE_PX[0], width_px or DEFAULT_SIZE_PX[1]
     specs = _specs(net, h, w)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.", suffix=".partial", dir=out.parent))
+    try:
+        out.parent.mkdir(parents=True, exist_ok=True)
+        tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.", suffix=".partial", dir=out.parent))
+    except OSError as e:
+        raise ExportError(f"{str(out)!r}: cannot write there ({e.strerror})") from None
     umask = os.umask(0)
     os.umask(umask)
     os.chmod(tmp, 0o777 & ~umask)  # mkdtemp makes it private; the export is an ordinary folder
     try:
-        entries = {}
-        for name in GRAPHS:
-            module, args, in_names, out_names, dynamic = specs[name]
-            path = tmp / f"{name}.onnx"
-            with warnings.catch_warnings(), torch.no_grad():
-                warnings.simplefilter("ignore")
-                # a forward(*args) is one parameter to torch.export: its specs go as one tuple
-                shapes = (dynamic,) if name in VARARGS_GRAPHS else dynamic
-                torch.onnx.export(
-                    module,
-                    args,
-                    str(path),
-                    input_names=in_names,
-                    output_names=out_names,
-                    dynamic_shapes=shapes,
-                    opset_version=OPSET,
-                    dynamo=True,
-                    external_data=False,
-                    verbose=False,
-                )
-                outputs = module(*args)
-            onnx.checker.check_model(str(path), full_check=True)
-            outputs = outputs if isinstance(outputs, tuple) else (outputs,)
-            out_dynamic = [{0: "views", 1: "thresholds"} if name == "thresholds" else {0: "views"}] * len(outputs)
-            entries[name] = {
-                "file": path.name,
-                "sha256": sha256_file(path),
-                "inputs": _io(args, in_names, dynamic),
-                "outputs": _io(outputs, out_names, out_dynamic),
-            }
-        manifest = {
-            "format": FORMAT,
-            "config_name": ckpt["config_name"],
-            "model_config": json.loads(json.dumps(asdict(cfg))),
-            "weights": {
-                "file": Path(weights).name,
-                "sha256": sha256_file(weights),
-                "release": release_name(ckpt, weights),
-            },
-            "image": {
-                "height_px": h,
-                "width_px": w,
-                "layout": "NCHW",
-                "channels": "RGB",
-                "range": [0.0, 1.0],
-                "normalisation": "(x - 0.5) / 0.5, inside the graphs",
-            },
-            "frame_dt_s": cfg.frame_dt_s,
-            "tau_range_s": [cfg.tau_min_s, cfg.tau_max_s],
-            "eta_range": [
-                cfg.tau_min_s / (cfg.tau_min_s + cfg.frame_dt_s),
-                cfg.tau_max_s / (cfg.tau_max_s + cfg.frame_dt_s),
-            ],
-            "continuous": {"eta_min": cfg.cont_eta_min, "eta_max": cfg.cont_eta_max, "levels": cfg.cont_levels},
-            "opset": OPSET,
-            "graphs": entries,
-            "exporter": {
-                "torch": torch.__version__,
-                "onnx": onnx.__version__,
-                "created": datetime.date.today().isoformat(),
-            },
-        }
+        entries = {name: _export_graph(name, specs[name], tmp) for name in GRAPHS}
+        manifest = _manifest(ckpt, weights, h, w, entries)
         (tmp / MANIFEST).write_text(json.dumps(manifest, indent=2) + "\n")
         _swap_in(tmp, out)
         return manifest
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise
+
+
+def _export_graph(name: str, spec, tmp: Path) -> dict:
+    """One graph exported with torch.onnx (dynamo), checked by onnx; -> its manifest entry."""
+    import onnx
+    import torch
+
+    module, args, in_names, out_names, dynamic = spec
+    path = tmp / f"{name}.onnx"
+    with warnings.catch_warnings(), torch.no_grad():
+        warnings.simplefilter("ignore")
+        # a forward(*args) is one parameter to torch.export: its specs go as one tuple
+        shapes = (dynamic,) if name in VARARGS_GRAPHS else dynamic
+        torch.onnx.export(
+            module,
+            args,
+            str(path),
+            input_names=in_names,
+            output_names=out_names,
+            dynamic_shapes=shapes,
+            opset_version=OPSET,
+            dynamo=True,
+            external_data=False,
+            verbose=False,
+        )
+        outputs = module(*args)
+    onnx.checker.check_model(str(path), full_check=True)
+    outputs = outputs if isinstance(outputs, tuple) else (outputs,)
+    out_dynamic = [{0: "views", 1: "thresholds"} if name == "thresholds" else {0: "views"}] * len(outputs)
+    return {
+        "file": path.name,
+        "sha256": sha256_file(path),
+        "inputs": _io(args, in_names, dynamic),
+        "outputs": _io(outputs, out_names, out_dynamic),
+    }
+
+
+def _manifest(ckpt: dict, weights, h: int, w: int, entries: dict) -> dict:
+    import onnx
+    import torch
+
+    from bittc_core.checkpoint import release_name
+
+    cfg = ckpt["model_config"]
+    return {
+        "format": FORMAT,
+        "config_name": ckpt["config_name"],
+        "model_config": json.loads(json.dumps(asdict(cfg))),
+        "weights": {"file": Path(weights).name, "sha256": sha256_file(weights), "release": release_name(ckpt, weights)},
+        "image": {
+            "height_px": h,
+            "width_px": w,
+            "layout": "NCHW",
+            "channels": "RGB",
+            "range": [0.0, 1.0],
+            "normalisation": "(x - 0.5) / 0.5, inside the graphs",
+        },
+        "frame_dt_s": cfg.frame_dt_s,
+        "tau_range_s": [cfg.tau_min_s, cfg.tau_max_s],
+        "eta_range": [
+            cfg.tau_min_s / (cfg.tau_min_s + cfg.frame_dt_s),
+            cfg.tau_max_s / (cfg.tau_max_s + cfg.frame_dt_s),
+        ],
+        "continuous": {"eta_min": cfg.cont_eta_min, "eta_max": cfg.cont_eta_max, "levels": cfg.cont_levels},
+        "opset": OPSET,
+        "graphs": entries,
+        "exporter": {
+            "torch": torch.__version__,
+            "onnx": onnx.__version__,
+            "created": datetime.date.today().isoformat(),
+        },
+    }
 
 
 def _swap_in(tmp: Path, out: Path) -> None:

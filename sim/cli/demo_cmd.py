@@ -33,8 +33,8 @@ def add_parser(sub) -> argparse.ArgumentParser:
 
 
 def run(args) -> int:
-    from bittc_core.cli.common import parse_fovea
-    from bittc_core.cli.sweep_cmd import execute
+    from sim.cli.common import parse_fovea
+    from sim.cli.sweep_cmd import execute
     from sim.sweep.plan import SweepSettings
 
     foveas = tuple(dict.fromkeys(parse_fovea(f) for f in args.fovea))

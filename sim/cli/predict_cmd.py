@@ -38,7 +38,8 @@ from pathlib import Path
 
 import numpy as np
 
-from bittc_core.cli.common import (
+from bittc_core.errors import CliError
+from sim.cli.common import (
     TTA_MODES,
     add_backend_flags,
     add_device_flag,
@@ -48,7 +49,6 @@ from bittc_core.cli.common import (
     parse_size,
     writable_dir,
 )
-from bittc_core.errors import CliError
 
 METHODS = ("bittc", "flow")  # the oracle needs ground truth, which image files lack
 DEFAULT_TAU_S = (0.5, 1.0, 2.0)
@@ -165,7 +165,7 @@ def fovea_box(shape_hw, zoom: float, size_hw, center_uv=None) -> tuple[int, int,
 
 def _check_flags(args) -> tuple[tuple[int, int] | None, float | None]:
     """-> (the network size or None, the fovea zoom or None); every flag checked."""
-    from bittc_core.cli.common import parse_fovea
+    from sim.cli.common import parse_fovea
 
     if args.method not in METHODS:
         raise CliError(f"--method {args.method!r}: expected one of {METHODS}")

@@ -5,9 +5,9 @@ from __future__ import annotations
 import argparse
 
 import scenarios
-from bittc_core.cli.common import add_seed_flag, check_seed, writable_dir
-from bittc_core.cli.loop_flags import add_controller_flags, controller_from_args
-from bittc_core.cli.run_cmd import add_camera_flags, camera_from_args, textures_from_args
+from sim.cli.common import add_seed_flag, check_seed, writable_dir
+from sim.cli.loop_flags import add_controller_flags, controller_from_args
+from sim.cli.run_cmd import add_camera_flags, camera_from_args, textures_from_args
 
 
 def add_parser(sub) -> argparse.ArgumentParser:

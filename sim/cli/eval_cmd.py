@@ -22,7 +22,8 @@ import time
 from pathlib import Path
 
 from bittc_core.atomic import write_text_atomic
-from bittc_core.cli.common import (
+from bittc_core.errors import CliError, ConfigError
+from sim.cli.common import (
     TTA_MODES,
     add_backend_flags,
     add_device_flag,
@@ -34,7 +35,6 @@ from bittc_core.cli.common import (
     flag_error,
     parse_fovea,
 )
-from bittc_core.errors import CliError, ConfigError
 
 METHODS = ("bittc", "flow", "oracle", "oracle-auc")
 SPLITS = ("train", "val", "test")

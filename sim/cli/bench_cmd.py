@@ -6,8 +6,8 @@ import argparse
 import sys
 from pathlib import Path
 
-from bittc_core.cli.common import check_frame_size, parse_fovea, parse_size
 from bittc_core.errors import BittcError, CliError
+from sim.cli.common import check_frame_size, parse_fovea, parse_size
 
 DEFAULT_CONFIG = "cpu-small-corr"
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from bittc_core.cli.common import add_fovea_flag
+from sim.cli.common import add_fovea_flag
 
 
 def add_parser(sub) -> argparse.ArgumentParser:
@@ -35,17 +35,12 @@ def add_parser(sub) -> argparse.ArgumentParser:
     return p
 
 
-def run(args) -> int:
+def _check(args):
+    """-> (out path, (H, W), the fovea's zoom); every flag checked before anything is timed."""
     from pathlib import Path
 
-    from bittc_core import profiling
-    from bittc_core.checkpoint import DEFAULT_WEIGHTS, load_checkpoint, release_name
-    from bittc_core.cli.common import backend_kwargs, check_frame_size, parse_fovea, parse_size
     from bittc_core.errors import CliError
-    from bittc_core.estimator import make_estimator
-    from bittc_core.export.manifest import sha256_file
-    from sim.job_timing import JobSetting, profile_settings, time_jobs
-    from sim.profile_file import fit_cost_terms, write_profile_file
+    from sim.cli.common import check_frame_size, parse_fovea, parse_size
 
     out = Path(args.out)
     if out.suffix not in (".yaml", ".yml"):
@@ -57,41 +52,71 @@ def run(args) -> int:
     h, w = parse_size(args.size)
     check_frame_size((h, w), "bittc", f"--size {args.size}", hint="")
     zoom = parse_fovea(args.fovea) or 4.0  # the second view's zoom does not change its cost
-    weights = args.weights or str(DEFAULT_WEIGHTS)
+    return out, (h, w), zoom
+
+
+def _fit(jobs: dict, measured: dict) -> tuple[dict, dict, list[dict]]:
+    """family -> settings and medians [ms] -> (family -> cost terms, family -> fit residuals, timing rows)."""
+    from sim.cost_model import COST_TERMS
+    from sim.profile_file import fit_cost_terms
+
+    doc_terms, fits, timings = {}, {}, []
+    for family, settings in jobs.items():
+        rows = [(s.work(family, cached=family == "bittc"), t) for s, t in zip(settings, measured[family])]
+        terms, rms, worst = fit_cost_terms(rows)
+        doc_terms[family] = {k: getattr(terms, k) for k in COST_TERMS}
+        fits[family] = {"rms_residual_ms": round(rms, 3), "max_residual_ms": round(worst, 3)}
+        timings += [
+            {"estimator": family, "views": wk.views, "thresholds": wk.thresholds, "extractions": wk.extractions}
+            | {"median_ms": t}
+            for wk, t in rows
+        ]
+    return doc_terms, fits, timings
+
+
+def _print_fit(doc_terms: dict, fits: dict, timings: list[dict]) -> None:
+    from sim.cost_model import CostTerms, JobWork
+
+    print(f"{'estimator':<10}{'views':>6}{'thr':>5}{'extr':>5}{'median ms':>11}{'fit ms':>8}")
+    for r in timings:
+        wk = JobWork(r["estimator"], r["views"], r["thresholds"], r["extractions"])
+        fit = CostTerms(**doc_terms[r["estimator"]]).latency_ms(wk)
+        print(
+            f"{r['estimator']:<10}{wk.views:>6}{wk.thresholds:>5}{wk.extractions:>5}{r['median_ms']:>11.2f}{fit:>8.2f}"
+        )
+    for family, t in doc_terms.items():
+        terms = ", ".join(f"{k} {v:.2f}" for k, v in t.items())
+        print(f"{family}: {terms} (rms {fits[family]['rms_residual_ms']:.2f} ms)")
+
+
+def run(args) -> int:
+    from pathlib import Path
+
     import torch
 
+    from bittc_core import profiling
+    from bittc_core.checkpoint import DEFAULT_WEIGHTS, load_checkpoint, release_name
+    from bittc_core.estimator import make_estimator
+    from bittc_core.export.manifest import sha256_file
+    from sim.cli.common import backend_kwargs
+    from sim.job_timing import JobSetting, profile_settings, time_jobs
+    from sim.profile_file import write_profile_file
+
+    out, (h, w), zoom = _check(args)
+    weights = args.weights or str(DEFAULT_WEIGHTS)
     torch.set_num_threads(args.threads)
     est = make_estimator("bittc", device="cpu", **({"weights": weights} | backend_kwargs(args)))
-    flow = make_estimator("flow")
     jobs = {"bittc": profile_settings("bittc", zoom), "flow": profile_settings("flow", zoom)}
     print(
         f"timing {args.backend} and flow jobs at {h}x{w} px, {args.threads} threads: "
         f"{sum(map(len, jobs.values()))} settings and continuous, {args.calls} calls each, interleaved ..."
     )
     net_ms = time_jobs(est, [*jobs["bittc"], JobSetting(0, continuous=True)], (h, w), args.calls)
-    flow_ms = time_jobs(flow, jobs["flow"], (h, w), args.calls)
-    measured = {"bittc": net_ms[:-1], "flow": flow_ms}
-    doc_terms, fits, timings = {}, {}, []
-    for family, settings in jobs.items():
-        rows = [(s.work(family, cached=family == "bittc"), t) for s, t in zip(settings, measured[family])]
-        terms, rms, worst = fit_cost_terms(rows)
-        doc_terms[family] = {k: getattr(terms, k) for k in ("extract_ms", "view_ms", "threshold_ms", "job_ms")}
-        fits[family] = {"rms_residual_ms": round(rms, 3), "max_residual_ms": round(worst, 3)}
-        timings += [
-            {
-                "estimator": family,
-                "views": wk.views,
-                "thresholds": wk.thresholds,
-                "extractions": wk.extractions,
-                "median_ms": t,
-            }
-            for wk, t in rows
-        ]
+    measured = {"bittc": net_ms[:-1], "flow": time_jobs(make_estimator("flow"), jobs["flow"], (h, w), args.calls)}
+    doc_terms, fits, timings = _fit(jobs, measured)
     m = profiling.machine()
-    name = args.name or m["node"] or "this-machine"
-    ckpt = load_checkpoint(weights)
     doc = {
-        "name": name,
+        "name": args.name or m["node"] or "this-machine",
         **doc_terms,
         "continuous_ms": net_ms[-1],
         "measured": True,
@@ -104,27 +129,16 @@ def run(args) -> int:
         "backend": args.backend,
         "size_px": [h, w],
         "threads": args.threads,
-        "weights": {"file": Path(weights).name, "sha256": sha256_file(weights), "release": release_name(ckpt, weights)},
+        "weights": {
+            "file": Path(weights).name,
+            "sha256": sha256_file(weights),
+            "release": release_name(load_checkpoint(weights), weights),
+        },
         "machine": m,
         "versions": profiling.versions(args.backend),
         "date": profiling.today(),
     }
     write_profile_file(out, doc)
-    from sim.latency import CostTerms, JobWork
-
-    print(f"{'estimator':<10}{'views':>6}{'thr':>5}{'extr':>5}{'median ms':>11}{'fit ms':>8}")
-    for r in timings:
-        wk = JobWork(r["estimator"], r["views"], r["thresholds"], r["extractions"])
-        fit = CostTerms(**doc_terms[r["estimator"]]).latency_ms(wk)
-        print(
-            f"{r['estimator']:<10}{r['views']:>6}{r['thresholds']:>5}{r['extractions']:>5}{r['median_ms']:>11.2f}"
-            f"{fit:>8.2f}"
-        )
-    for family, t in doc_terms.items():
-        print(
-            f"{family}: "
-            + ", ".join(f"{k} {v:.2f}" for k, v in t.items())
-            + f" (rms {fits[family]['rms_residual_ms']:.2f} ms)"
-        )
+    _print_fit(doc_terms, fits, timings)
     print(f"continuous {net_ms[-1]:.1f} ms per view; wrote {out}; use it with --latency profile:{out}")
     return 0

@@ -29,8 +29,8 @@ def run(args) -> int:
     import time
 
     from bittc_core.checkpoint import DEFAULT_WEIGHTS
-    from bittc_core.cli.common import check_frame_size, parse_size
     from bittc_core.export.onnx_export import export_onnx
+    from sim.cli.common import check_frame_size, parse_size
 
     h, w = parse_size(args.size)
     check_frame_size((h, w), "bittc", f"--size {args.size}", hint="")

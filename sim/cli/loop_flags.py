@@ -48,7 +48,14 @@ def add_controller_flags(p: argparse.ArgumentParser, default: str | None = None)
         metavar="N",
         help="geofence/flow: pair each frame with the one N frames before (default 2)",
     )
-    from bittc_core.cli.common import add_backend_flags
+    p.add_argument(
+        "--fovea-fences-from",
+        type=float,
+        default=None,
+        metavar="S",
+        help="geofence/flow with a fovea: fences below S seconds run on the wide view only (default 0: all in both)",
+    )
+    from sim.cli.common import add_backend_flags
 
     add_backend_flags(p)
 
@@ -81,19 +88,21 @@ def controller_from_args(args, camera):
             settings["frame_stride"] = check_frame_stride(args.frame_stride)
         except ConfigError as e:
             raise CliError(f"--frame-stride: {e}") from None
+    if args.fovea_fences_from is not None:
+        settings["fovea_fences_from_s"] = args.fovea_fences_from
     if args.weights is not None:
         if name != "geofence":
             raise CliError(f"--weights applies to the geofence controller, not {name!r}")
         settings["weights"] = args.weights
     if args.backend != "torch" or args.onnx is not None:
-        from bittc_core.cli.common import backend_kwargs
+        from sim.cli.common import backend_kwargs
 
         if name != "geofence":
             raise CliError(f"--backend / --onnx apply to the geofence controller, not {name!r}")
         settings.update(backend_kwargs(args))
     if settings and name in controllers.REGISTRY and not takes_fences:
         raise CliError(
-            f"--num-alphas / --ttc-thresholds / --frame-stride apply to "
+            f"--num-alphas / --ttc-thresholds / --frame-stride / --fovea-fences-from apply to "
             f"{' and '.join(controllers.ESTIMATOR_CONTROLLERS)}, not {name!r}"
         )
     try:
@@ -107,7 +116,7 @@ def controller_from_args(args, camera):
     try:
         ctrl.reset(Calibration.from_camera(camera, EGO_SIZE_M))
     except ConfigError as e:
-        raise CliError(f"--fps / --frame-stride: {e}") from None
+        raise CliError(f"--fps / --frame-stride / --fovea-fences-from: {e}") from None
     if latency is None:
         from sim.runner import default_latency
 

@@ -15,8 +15,8 @@ import sys
 from pathlib import Path
 
 from bittc_core.atomic import write_text_atomic
-from bittc_core.cli.common import add_device_flag, add_seed_flag, check_device, check_seed, flag_error
 from bittc_core.errors import CliError, ConfigError
+from sim.cli.common import add_device_flag, add_seed_flag, check_device, check_seed, flag_error
 
 STAGE_CHOICES = ("flow", "binary", "continuous", "all")
 
@@ -236,15 +236,40 @@ def run(args) -> int:
 
 
 def _train(args, paths) -> int:
-    """The run behind ``run``, with this run's output locked."""
-    import torch
+    """The run behind ``run``, with this run's output locked: check, build, then train stage by stage."""
+    from bittc_core.train import Trainer
 
-    from bittc_core.checkpoint import build_network, init_network, load_checkpoint, pick_device
-    from bittc_core.model import BinaryTTCNet, get_config
-    from bittc_core.train import STAGES, TrainConfig, Trainer
-    from bittc_core.train.data import open_split
-    from bittc_core.train.params import frozen_prefixes, param_groups
+    _check_paths(args, paths)
+    net, teacher, distill_weight, device = _networks(args)
+    lr_mults = parse_lr_mults(args.lr_mult)
+    train_set, val_set = _open_splits(args, net)
+    stages, resume_stage = _stages(args, paths, distill_weight, lr_mults)
+    stage_cfgs = _stage_configs(args, net, stages, lr_mults, distill_weight)
+    write_yaml_atomic(
+        paths.config,
+        {
+            "argv": list(sys.argv),
+            "data": args.data,
+            "device": str(device),
+            "stages": stages,
+            "model_config_name": args.config,
+            "teacher": args.teacher,
+            "model_config": dataclasses.asdict(net.config),
+            "train_config": {stage: dataclasses.asdict(cfg) for stage, cfg in stage_cfgs.items()},  # as each stage runs
+        },
+    )
+    meta = {"data": args.data, "seed": args.seed, **({"teacher": args.teacher} if args.teacher else {})}
+    for stage, cfg in stage_cfgs.items():
+        trainer = Trainer(net, args.config, cfg, train_set, val_set, device, paths, meta, teacher=teacher)
+        if stage == resume_stage:
+            trainer.resume()
+        summary = trainer.run()
+        print(" ".join(f"{k}={v:.4f}" if isinstance(v, float) else f"{k}={v}" for k, v in summary.items()))
+    print(f"wrote {paths.best} (best), {paths.last}, {paths.csv}, {paths.config}")
+    return 0
 
+
+def _check_paths(args, paths) -> None:
     if args.resume and not paths.last.is_file():
         raise CliError(f"--resume: no resumable checkpoint at {str(paths.last)!r}")
     if not args.resume and (paths.last.exists() or paths.csv.exists()):
@@ -253,19 +278,34 @@ def _train(args, paths) -> int:
         )
     if args.teacher and Path(args.teacher).resolve() in (paths.best.resolve(), paths.last.resolve()):
         raise CliError(f"--teacher {args.teacher!r}: is this run's own checkpoint (--out {args.out!r} writes it)")
+
+
+def _networks(args):
+    """-> (the network to train, the teacher or None, the distillation weight, the device)."""
+    import torch
+
+    from bittc_core.checkpoint import build_network, init_network, load_checkpoint, pick_device
+    from bittc_core.model import BinaryTTCNet, get_config
+
     try:
         device = pick_device(args.device)
         torch.manual_seed(args.seed)
         net = init_network(args.init, args.config) if args.init else BinaryTTCNet(get_config(args.config))
     except ConfigError as e:
         raise flag_error(e, {"device": "--device", "initial checkpoint": "--init"}) from None
-    lr_mults = parse_lr_mults(args.lr_mult)
     teacher, distill_weight = None, 0.0
     if args.teacher:
         distill_weight = args.distill_weight or 1.0
         teacher = build_network(load_checkpoint(args.teacher, map_location="cpu"))
         if teacher.config != net.config:
             raise CliError(f"--teacher {args.teacher!r}: its model config differs from --config {args.config!r}")
+    return net, teacher, distill_weight, device
+
+
+def _open_splits(args, net):
+    """-> (train, val) datasets, refused when their frame interval is not the config's."""
+    from bittc_core.train.data import open_split
+
     try:
         train_set = open_split(args.data, "train", augment=True, seed=args.seed)
         val_set = open_split(args.data, "val", seed=args.seed)
@@ -278,17 +318,31 @@ def _train(args, paths) -> int:
                 f"--data {args.data!r}: the {name} split has frame interval dt_s = {dt:g} s, but config "
                 f"{args.config!r} is trained at frame_dt_s = {net.config.frame_dt_s:g} s"
             )
+    return train_set, val_set
+
+
+def _stages(args, paths, distill_weight, lr_mults) -> tuple[list[str], str | None]:
+    """-> (the stages to run, the stage a --resume continues or None)."""
+    from bittc_core.checkpoint import load_checkpoint
+    from bittc_core.train import STAGES
+
     stages = list(STAGES) if args.stage == "all" else [args.stage]
-    resume_stage = None
-    if args.resume:
-        last = load_checkpoint(paths.last, map_location="cpu", expected_config=args.config)
-        state, meta_last = last.get("train_state", {}), last.get("train_meta", {})
-        resume_stage = state.get("stage")
-        _check_same_teacher(paths.last.name, meta_last, args.teacher, distill_weight)
-        _check_same_lr_mults(paths.last.name, meta_last, lr_mults)
-        if resume_stage not in stages:
-            raise CliError(f"--resume: {paths.last.name} is at stage {resume_stage!r}, not in {stages}")
-        stages = stages[stages.index(resume_stage) :]
+    if not args.resume:
+        return stages, None
+    last = load_checkpoint(paths.last, map_location="cpu", expected_config=args.config)
+    state, meta_last = last.get("train_state", {}), last.get("train_meta", {})
+    resume_stage = state.get("stage")
+    _check_same_teacher(paths.last.name, meta_last, args.teacher, distill_weight)
+    _check_same_lr_mults(paths.last.name, meta_last, lr_mults)
+    if resume_stage not in stages:
+        raise CliError(f"--resume: {paths.last.name} is at stage {resume_stage!r}, not in {stages}")
+    return stages[stages.index(resume_stage) :], resume_stage
+
+
+def _stage_configs(args, net, stages, lr_mults, distill_weight) -> dict:
+    """stage -> its TrainConfig, each checked against the network before anything is written."""
+    from bittc_core.train import TrainConfig
+    from bittc_core.train.params import frozen_prefixes, param_groups
 
     base = TrainConfig(
         steps=args.steps,
@@ -316,25 +370,4 @@ def _train(args, paths) -> int:
         except ValueError as err:
             frozen = " --freeze-binary" if cfg.freeze_binary else ""
             raise CliError(f"--lr-mult: {err} (config {args.config!r}, --stage {stage}{frozen})") from None
-    write_yaml_atomic(
-        paths.config,
-        {
-            "argv": list(sys.argv),
-            "data": args.data,
-            "device": str(device),
-            "stages": stages,
-            "model_config_name": args.config,
-            "teacher": args.teacher,
-            "model_config": dataclasses.asdict(net.config),
-            "train_config": {stage: dataclasses.asdict(cfg) for stage, cfg in stage_cfgs.items()},  # as each stage runs
-        },
-    )
-    meta = {"data": args.data, "seed": args.seed, **({"teacher": args.teacher} if args.teacher else {})}
-    for stage, cfg in stage_cfgs.items():
-        trainer = Trainer(net, args.config, cfg, train_set, val_set, device, paths, meta, teacher=teacher)
-        if stage == resume_stage:
-            trainer.resume()
-        summary = trainer.run()
-        print(" ".join(f"{k}={v:.4f}" if isinstance(v, float) else f"{k}={v}" for k, v in summary.items()))
-    print(f"wrote {paths.best} (best), {paths.last}, {paths.csv}, {paths.config}")
-    return 0
+    return stage_cfgs

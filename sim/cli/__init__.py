@@ -23,21 +23,21 @@ from bittc_core.errors import BittcError
 
 #: subcommand name -> module; heavy imports (torch, pybullet) stay inside each run()
 COMMANDS: dict[str, str] = {
-    "run": "bittc_core.cli.run_cmd",
-    "scenarios": "bittc_core.cli.scenarios_cmd",
-    "suite": "bittc_core.cli.suite_cmd",
-    "generate": "bittc_core.cli.generate_cmd",
-    "data": "bittc_core.cli.data_cmd",
-    "train": "bittc_core.cli.train_cmd",
-    "eval": "bittc_core.cli.eval_cmd",
-    "bench": "bittc_core.cli.bench_cmd",
-    "predict": "bittc_core.cli.predict_cmd",
-    "profiles": "bittc_core.cli.profiles_cmd",
-    "profile": "bittc_core.cli.profile_cmd",
-    "export": "bittc_core.cli.export_cmd",
-    "sweep": "bittc_core.cli.sweep_cmd",
-    "demo": "bittc_core.cli.demo_cmd",
-    "weights": "bittc_core.cli.weights_cmd",
+    "run": "sim.cli.run_cmd",
+    "scenarios": "sim.cli.scenarios_cmd",
+    "suite": "sim.cli.suite_cmd",
+    "generate": "sim.cli.generate_cmd",
+    "data": "sim.cli.data_cmd",
+    "train": "sim.cli.train_cmd",
+    "eval": "sim.cli.eval_cmd",
+    "bench": "sim.cli.bench_cmd",
+    "predict": "sim.cli.predict_cmd",
+    "profiles": "sim.cli.profiles_cmd",
+    "profile": "sim.cli.profile_cmd",
+    "export": "sim.cli.export_cmd",
+    "sweep": "sim.cli.sweep_cmd",
+    "demo": "sim.cli.demo_cmd",
+    "weights": "sim.cli.weights_cmd",
 }
 
 

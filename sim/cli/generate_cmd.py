@@ -6,8 +6,8 @@ import argparse
 import json
 from pathlib import Path
 
-from bittc_core.cli.common import add_seed_flag, check_seed, flag_error, parse_size
 from bittc_core.errors import ConfigError
+from sim.cli.common import add_seed_flag, check_seed, flag_error, parse_size
 
 #: the fields of ``GenerationConfig`` and ``generate`` -> their flags
 _FLAGS = {
@@ -84,7 +84,7 @@ def run(args) -> int:
 
 
 def _generate(args, h: int, w: int) -> dict:
-    from bittc_core.data.generate import GenerationConfig, generate
+    from sim.datagen.generate import GenerationConfig, generate
 
     cfg = GenerationConfig(
         seed=args.seed,

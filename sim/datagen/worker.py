@@ -15,7 +15,7 @@ import traceback
 from pathlib import Path
 
 from bittc_core.data.format import write_sample
-from bittc_core.data.gen_config import GC_THRESHOLDS, GenerationConfig, sample_seed, scene_seed
+from sim.datagen.config import GC_THRESHOLDS, GenerationConfig, sample_seed, scene_seed
 
 _WORKER: dict = {}
 

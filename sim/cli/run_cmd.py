@@ -7,7 +7,9 @@ import json
 from pathlib import Path
 
 import scenarios
-from bittc_core.cli.common import (
+from bittc_core.errors import CliError
+from sim.camera import CameraConfig
+from sim.cli.common import (
     add_fovea_flag,
     add_seed_flag,
     check_seed,
@@ -16,9 +18,7 @@ from bittc_core.cli.common import (
     texture_style,
     writable_dir,
 )
-from bittc_core.cli.loop_flags import add_controller_flags, controller_from_args
-from bittc_core.errors import CliError
-from sim.camera import CameraConfig
+from sim.cli.loop_flags import add_controller_flags, controller_from_args
 
 
 def add_parser(sub) -> argparse.ArgumentParser:

@@ -8,8 +8,8 @@ import time
 from dataclasses import asdict, dataclass, field
 
 from bittc_core.data.format import sample_dirname
-from bittc_core.data.gen_config import LOCAL_CHUNK, MAX_ATTEMPTS, RAY_CHUNK, STEADY_MIN_S, STEADY_MIN_SAMPLES
-from bittc_core.data.gen_worker import close_worker, make_many, make_sample, worker_init
+from sim.datagen.config import LOCAL_CHUNK, MAX_ATTEMPTS, RAY_CHUNK, STEADY_MIN_S, STEADY_MIN_SAMPLES
+from sim.datagen.worker import close_worker, make_many, make_sample, worker_init
 
 
 def _progress(total: int, enabled: bool):

@@ -18,7 +18,9 @@ from pathlib import Path
 import yaml
 
 from bittc_core.data.format import SPLITS, sample_dirname, sample_is_complete
-from bittc_core.data.gen_config import (
+from bittc_core.errors import ConfigError
+from bittc_core.parallel import LOCK_FILE, OutputLock, bounded_workers, check_workers
+from sim.datagen.config import (
     BACKENDS,
     LOCAL_CHUNK,
     MAX_ATTEMPTS,
@@ -27,9 +29,7 @@ from bittc_core.data.gen_config import (
     STEADY_MIN_SAMPLES,
     GenerationConfig,
 )
-from bittc_core.data.gen_pool import run_local, run_ray, steady_rate
-from bittc_core.errors import ConfigError
-from bittc_core.parallel import LOCK_FILE, OutputLock, bounded_workers, check_workers
+from sim.datagen.pool import run_local, run_ray, steady_rate
 
 __all__ = ["GenerationConfig", "generate", "pending_indices", "prepare_dir"]
 

@@ -7,8 +7,8 @@ import argparse
 import shlex
 import sys
 
-from bittc_core.cli.common import add_fovea_flag, flag_error, parse_fovea
 from bittc_core.errors import CliError, ConfigError
+from sim.cli.common import add_fovea_flag, flag_error, parse_fovea
 
 
 def add_parser(sub) -> argparse.ArgumentParser:
