@@ -39,8 +39,11 @@ def save_checkpoint(path: str | os.PathLike, payload: dict) -> None:
     if missing:
         raise ValueError(f"checkpoint payload lacks {missing}")
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = open_temp_beside(path)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = open_temp_beside(path)
+    except OSError as e:
+        raise CheckpointError(f"checkpoint {str(path)!r}: cannot write there ({e.strerror})") from None
     try:
         with os.fdopen(fd, "wb") as f:
             torch.save(payload, f)

@@ -79,11 +79,14 @@ class OutputLock:
         self.release()
 
     def acquire(self) -> OutputLock:
-        """Take the lock (ConfigError when a live process holds it; OSError when the folder is unwritable)."""
+        """Take the lock (ConfigError when a live process holds it or the folder cannot be written)."""
         import fcntl
 
-        self.path.parent.mkdir(parents=True, exist_ok=True)
-        fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
+        try:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+            fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
+        except OSError as e:
+            raise ConfigError(f"{self.what} {str(self.path.parent)!r}: cannot write there ({e.strerror})") from None
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:

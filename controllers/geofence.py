@@ -92,9 +92,15 @@ MAX_THRESHOLDS = 64  # thresholds per job: the one bound of K (CLI, sweeps, the 
 MAX_FRAME_STRIDE = 10  # [frames] the one bound of the frame stride
 
 
+def frame_stride_ok(frame_stride) -> bool:
+    return (
+        not isinstance(frame_stride, bool) and isinstance(frame_stride, int) and 1 <= frame_stride <= MAX_FRAME_STRIDE
+    )
+
+
 def check_frame_stride(frame_stride) -> int:
     """An integer stride in [1, MAX_FRAME_STRIDE]; anything else is refused by value."""
-    if isinstance(frame_stride, bool) or not isinstance(frame_stride, int) or not 1 <= frame_stride <= MAX_FRAME_STRIDE:
+    if not frame_stride_ok(frame_stride):
         raise ConfigError(f"frame stride {frame_stride!r}: must be an integer in [1, {MAX_FRAME_STRIDE}]")
     return frame_stride
 
@@ -155,7 +161,7 @@ class GeofenceConfig:
             "persistence_frames": self.persistence_frames >= 1,
             "release_frames": self.release_frames >= 1,
             "min_speed_mps": self.min_speed_mps >= 0,
-            "frame_stride": isinstance(self.frame_stride, int) and 1 <= self.frame_stride <= MAX_FRAME_STRIDE,
+            "frame_stride": frame_stride_ok(self.frame_stride),
             "fovea_fences_from_s": math.isfinite(self.fovea_fences_from_s) and self.fovea_fences_from_s >= 0,
         }
         for name, ok in checks.items():

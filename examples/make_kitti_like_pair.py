@@ -1,6 +1,6 @@
 """Render a KITTI-like frame pair (375 x 1242 px, 0.1 s apart) of a bundled case, for `bittc predict`.
 
-Usage: python examples/make_kitti_like_pair.py [--scenario CCRs-70] [--t 2.5] [--out runs/pair]
+Usage: python examples/make_kitti_like_pair.py [--scenario CCRs-70] [--t 3.2] [--out runs/pair]
 Writes PREV.png and LATEST.png (the frames at t - 0.1 s and t) and truth.json (the critical
 actor's exact camera-plane TTC at t, from the simulator's ground truth). The camera has
 KITTI's image size and a 29 deg vertical field of view (KITTI's colour cameras: fx ~ 721 px).
@@ -32,7 +32,7 @@ KITTI_VFOV_DEG = 29.0  # [deg] 2 atan(187.5 / 721)
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--scenario", default="CCRs-70")
-    ap.add_argument("--t", type=float, default=2.5, help="capture time of LATEST [s]")
+    ap.add_argument("--t", type=float, default=3.2, help="capture time of LATEST [s]")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--out", default="runs/pair")
     args = ap.parse_args()

@@ -33,7 +33,10 @@ def test_sweep_and_generate_refuse_500_workers_before_starting_any(tmp_path, cap
     assert main(argv) == 2
     assert "workers 500" in capsys.readouterr().err and not out.exists()
     gen = tmp_path / "gen"
-    assert main(["generate", "--out", str(gen), "--split", "train", "--samples", "2", "--workers", "500"]) == 2
+    assert (
+        main(["generate", "--out", str(gen), "--split", "train", "--samples", "2", "--seed", "0", "--workers", "500"])
+        == 2
+    )
     assert "workers 500" in capsys.readouterr().err and not gen.exists()
 
 
@@ -61,7 +64,7 @@ def test_a_folder_in_use_is_refused_with_the_holders_pid(tmp_path, capsys):
         ]
         assert main(argv) == 2
         assert f"in use by a running process (pid {os.getpid()})" in capsys.readouterr().err
-        assert main(["generate", "--out", str(gen_out), "--split", "train", "--samples", "1"]) == 2
+        assert main(["generate", "--out", str(gen_out), "--split", "train", "--samples", "1", "--seed", "0"]) == 2
         assert f"pid {os.getpid()}" in capsys.readouterr().err
     assert [p.name for p in sweep_out.iterdir()] == [LOCK_FILE]  # nothing else written
     # released: the same sweep now runs
@@ -83,9 +86,9 @@ def test_train_into_a_checkpoint_in_use_is_refused(tmp_path, capsys):
         ["suite", "--controller", "oracle", "--scenarios", "CCRs-20", "--out", IMPOSSIBLE],
         ["sweep", "--suite", "CCRs-20", "--controllers", "oracle", "--out", IMPOSSIBLE],
         ["demo", "--out", IMPOSSIBLE],
-        ["generate", "--out", IMPOSSIBLE, "--split", "train", "--samples", "1"],
+        ["generate", "--out", IMPOSSIBLE, "--split", "train", "--samples", "1", "--seed", "0"],
         ["train", "--data", "synthetic", "--config", "tiny", "--out", f"{IMPOSSIBLE}/net.pt", "--steps", "1"],
-        ["eval", "--scenarios", "CCRs-20", "--out", f"{IMPOSSIBLE}/eval.json"],
+        ["eval", "--scenarios", "CCRs-20", "--method", "bittc", "--out", f"{IMPOSSIBLE}/eval.json"],
         ["bench", "--fovea", "off", "--out", f"{IMPOSSIBLE}/bench.json"],
         ["profile", "--out", f"{IMPOSSIBLE}/p.yaml"],
         ["export", "--onnx", IMPOSSIBLE],
@@ -94,7 +97,7 @@ def test_train_into_a_checkpoint_in_use_is_refused(tmp_path, capsys):
             "zero",
             str(ROOT / "bittc_core/weights/bittc_default.pt"),
             "--layers",
-            "x",
+            "cont_refine.out",
             "--out",
             f"{IMPOSSIBLE}/w.pt",
         ],
