@@ -280,7 +280,9 @@ def _video_frame(frame, rec, loop: ClosedLoop, scale: int) -> np.ndarray:
     )
     last = next((r for r in reversed(loop.records) if r.latency_s is not None), None)
     lat = f"{last.latency_s * 1e3:.0f} ms" if last is not None else "-"
-    fired = active.telemetry.get("fired_view") or "-"
+    alert = active.warning or active.decel_mps2 > 0
+    # the view whose fence fired in the job behind the command in effect; a latched stage holds without one
+    fired = active.telemetry.get("fired_view") or ("none (stage held)" if alert else "-")
     lines = [
         f"t {rec.t_s:5.2f} s   speed {rec.ego_speed_mps * 3.6:5.1f} km/h",
         f"gap {gap}   exact TTC {ttc}",
@@ -288,7 +290,7 @@ def _video_frame(frame, rec, loop: ClosedLoop, scale: int) -> np.ndarray:
     ]
     if frame.fovea is not None:
         lines.append(f"fired in view: {fired}")
-    return hud(img, lines, active.warning or active.decel_mps2 > 0)
+    return hud(img, lines, alert)
 
 
 def _write_outputs(
