@@ -122,7 +122,7 @@ def write_report(
     parts += [f"<p>{_esc(n)}</p>" for n in notes]
     parts += [
         "<h2>Summary</h2>",
-        "<p>Per controller, K and latency mode (definitions: <code>sim/sweep/tables.py</code>; "
+        "<p>Per controller, fovea, K and latency mode (definitions: <code>sim/sweep/tables.py</code>; "
         "Euro NCAP bands and gate: <code>sim/sweep/ncap.py</code>). Also as <a href='summary.csv'>summary.csv</a>, "
         "<a href='summary.md'>summary.md</a>; every run in <a href='results.csv'>results.csv</a>.</p>",
         _summary_table(summary),
