@@ -29,11 +29,12 @@ def max_workers() -> int:
     return max(16, 4 * cpu_count())
 
 
-def check_workers(requested, what: str = "workers") -> int:
-    """A worker count in [1, ``max_workers()``]; anything else refused (ConfigError naming it)."""
+def check_workers(requested, what: str = "workers", local: bool = True) -> int:
+    """A worker count in [1, ``max_workers()``] (``local=False``, workers on a Ray cluster:
+    only >= 1, the cluster's size is not this machine's); anything else refused by value."""
     if isinstance(requested, bool) or not isinstance(requested, int) or requested < 1:
         raise ConfigError(f"{what} {requested!r}: must be an integer >= 1")
-    if requested > max_workers():
+    if local and requested > max_workers():
         raise ConfigError(
             f"{what} {requested}: more than {max_workers()} worker processes on a {cpu_count()}-core machine "
             "is refused (each is a full process with its own renderer and network)"
@@ -41,11 +42,11 @@ def check_workers(requested, what: str = "workers") -> int:
     return requested
 
 
-def bounded_workers(requested, tasks: int, what: str = "workers") -> int:
+def bounded_workers(requested, tasks: int, what: str = "workers", local: bool = True) -> int:
     """-> the worker count to start for ``tasks`` tasks: at most ``tasks``; refused as
-    ``check_workers`` refuses; warned on stderr above the machine's cores."""
-    check_workers(requested, what)
-    if requested > cpu_count():
+    ``check_workers`` refuses; warned on stderr above the machine's cores (local workers)."""
+    check_workers(requested, what, local)
+    if local and requested > cpu_count():
         print(
             f"warning: {what} {requested} on {cpu_count()} cores: the workers share the cores "
             "(one thread each), so each runs slower and measured latency grows",
@@ -73,15 +74,18 @@ class OutputLock:
         self._fd: int | None = None
 
     def __enter__(self) -> OutputLock:
-        return self.acquire()
+        return self if self._fd is not None else self.acquire()
 
-    def __exit__(self, *exc) -> None:
-        self.release()
+    def __exit__(self, exc_type, *exc) -> None:
+        # a run refused or failed inside the lock leaves nothing it created behind
+        self.release(discard=exc_type is not None)
 
     def acquire(self) -> OutputLock:
         """Take the lock (ConfigError when a live process holds it or the folder cannot be written)."""
         import fcntl
 
+        self._new_dir = not self.path.parent.exists()
+        self._new_file = not self.path.exists()
         try:
             self.path.parent.mkdir(parents=True, exist_ok=True)
             fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
@@ -101,10 +105,20 @@ class OutputLock:
         self._fd = fd
         return self
 
-    def release(self) -> None:
-        if self._fd is not None:
-            import fcntl
+    def release(self, discard: bool = False) -> None:
+        """Unlock; with ``discard``, also remove the lock file and the folder if this lock created them
+        (the folder only when nothing else is in it)."""
+        if self._fd is None:
+            return
+        import fcntl
 
-            fcntl.flock(self._fd, fcntl.LOCK_UN)
-            os.close(self._fd)
-            self._fd = None
+        if discard and self._new_file:
+            self.path.unlink(missing_ok=True)
+            if self._new_dir:
+                try:
+                    self.path.parent.rmdir()
+                except OSError:
+                    pass
+        fcntl.flock(self._fd, fcntl.LOCK_UN)
+        os.close(self._fd)
+        self._fd = None

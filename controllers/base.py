@@ -18,6 +18,8 @@ loads it; see ``examples/my_controller.py``)::
     class MyController(Controller):
         name = "mine"
         needs_camera = True          # the loop renders frames and pairs them
+        estimator_kind = "flow"      # what a device profile charges per job ("bittc" or "flow")
+        num_alphas = 1               # thresholds per job and view
 
         def reset(self, calibration):
             self.cal = calibration

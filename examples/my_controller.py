@@ -22,7 +22,8 @@ class DistanceKeeper(Controller):
 
     name = "distance-keeper"
     needs_camera = True
-    num_alphas = 1
+    num_alphas = 1  # one threshold per job: what a device profile charges, with
+    estimator_kind = "flow"  # the flow baseline's cost terms
 
     def __init__(self, threshold_s: float = 1.5, min_px: int = 8):
         self.threshold_s = threshold_s

@@ -70,7 +70,7 @@ from sim.loop import ClosedLoop
 from sim.textures import TextureStyle
 from sim.traffic import MAX_SPEED_MPS
 
-CALIBRATION_BOUND = 1e4  # [px or m or deg] bounds of the calibration vector's space
+CALIBRATION_BOUND = 1e5  # [px or m or deg] bounds of the calibration vector's space (a fovea's focal too)
 
 
 def _one_case(scenario: str):
@@ -213,7 +213,9 @@ class ScenarioEnv(gym.Env):
             )
         had_collision = self._sim.collision is not None
         brake0 = self._loop.brake_integral
-        agent_s = time.perf_counter() - self._handed_out_s if self._handed_out_s is not None else 0.0
+        # the time since the observation was handed out, less what a wrapper charged inside it
+        since_s = time.perf_counter() - self._handed_out_s if self._handed_out_s is not None else 0.0
+        agent_s = max(since_s - self._charged_s, 0.0)
         job = self._loop.submit(BrakeCommand(float(a[0])), self._charged_s + agent_s, who="agent")
         self._charged_s = 0.0
         reward = -0.01 * (self._loop.brake_integral - brake0)

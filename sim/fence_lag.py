@@ -50,7 +50,7 @@ class FenceLagMeter:
             gt = gts.get(name)
             if gt is None:
                 continue
-            self.thresholds_s = tuple(view.thresholds_s)
+            self.thresholds_s = tuple(sorted(set(self.thresholds_s) | set(view.thresholds_s)))  # views may differ
             pix = (gt.instance == critical.instance) & gt.valid & np.isfinite(gt.tau_s) & (gt.tau_s > 0)
             if int(pix.sum()) < MIN_PIXELS:
                 continue
@@ -65,7 +65,8 @@ class FenceLagMeter:
                     covers[tau_i] = tau_v
             out[name] = shares
         if tau_star is not None:
-            best = {k: max(sh[k] for sh in out.values() if k in sh) for k in next(iter(out.values()))}
+            keys = sorted({k for sh in out.values() for k in sh}, key=float)
+            best = {k: max(sh[k] for sh in out.values() if k in sh) for k in keys}
             self.history.append((tau_star, best))
         return out
 

@@ -41,7 +41,16 @@ from controllers.base import BrakeCommand, Calibration, Controller, Observation
 from sim.episode import Frame, ScenarioSim, StepTruth
 from sim.fence_lag import FenceLagMeter
 from sim.ground_truth import GroundTruth
-from sim.latency import TIME_EPS_S, CommandQueue, FeatureCacheModel, Job, JobWork, LatencyMode, next_job
+from sim.latency import (
+    TIME_EPS_S,
+    CommandQueue,
+    FeatureCacheModel,
+    Job,
+    JobWork,
+    LatencyError,
+    LatencyMode,
+    next_job,
+)
 from sim.vehicles import EGO_SIZE_M
 
 cv2.setNumThreads(1)  # OpenCV's own pool would contend with the estimator's torch threads
@@ -186,6 +195,11 @@ class ClosedLoop:
     def drive(self, controller: Controller) -> None:
         """Run to the end with ``controller`` deciding every job (reset with this car's calibration)."""
         controller.reset(self.calibration)
+        if self.latency.kind == "profile" and controller.needs_camera and controller.estimator_kind is None:
+            raise LatencyError(
+                f"latency {self.latency}: controller {controller.name!r} does not say which estimator family the "
+                "profile should charge: set its estimator_kind ('bittc' or 'flow')"
+            )
         self.estimator = controller.estimator_kind
         self.views = len(controller.views)
         self.cached_frames = controller.cached_frames

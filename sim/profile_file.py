@@ -91,18 +91,25 @@ _WORK_KEYS = ("estimator", "views", "thresholds", "extractions")
 
 def fit_cost_terms(rows: list[tuple[JobWork, float]]) -> tuple[CostTerms, float, float]:
     """(work, median [ms]) of one estimator family -> (its cost terms by non-negative least
-    squares, rms residual [ms], max |residual| [ms]). A term the rows cannot tell apart from
-    the others (no extraction varies, say) is fitted as 0."""
+    squares, rms residual [ms], max |residual| [ms]). A term whose column is all zero (no
+    extraction, say) is fitted as 0."""
     X = np.array([[w.extractions, w.views, w.thresholds, 1.0] for w, _ in rows], dtype=np.float64)
     y = np.array([t for _, t in rows], dtype=np.float64)
-    active = [j for j in range(4) if X[:, j].any()]
-    coef = np.zeros(4)
-    while active:  # drop a negative term and refit (non-negative least squares on 4 terms)
-        sol, *_ = np.linalg.lstsq(X[:, active], y, rcond=None)
-        if (sol >= 0).all():
-            coef[active] = sol
-            break
-        active.pop(int(np.argmin(sol)))
+    # exact non-negative least squares on 4 terms: the best of the least-squares fits on every
+    # subset of the terms whose coefficients all come out >= 0 (the empty subset fits 0)
+    coef, best = np.zeros(4), float(y @ y)
+    for mask in range(1, 16):
+        cols = [j for j in range(4) if mask >> j & 1 and X[:, j].any()]
+        if len(cols) != bin(mask).count("1"):
+            continue
+        sol, *_ = np.linalg.lstsq(X[:, cols], y, rcond=None)
+        if (sol < 0).any():
+            continue
+        trial = np.zeros(4)
+        trial[cols] = sol
+        r = y - X @ trial
+        if float(r @ r) < best - 1e-12:
+            coef, best = trial, float(r @ r)
     res = y - X @ coef
     terms = CostTerms(**{k: round(float(v), 4) for k, v in zip(COST_TERMS, coef)})
     return terms, float(np.sqrt(np.mean(res**2))), float(np.abs(res).max())

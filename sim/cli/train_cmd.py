@@ -229,10 +229,8 @@ def run(args) -> int:
         lock.acquire()  # a second training into the same --out is refused with the holder's pid
     except OSError as err:
         raise CliError(f"--out {args.out!r}: cannot create its folder ({err})") from None
-    try:
+    with lock:  # acquired above; released, and discarded when the run is refused, on the way out
         return _train(args, paths)
-    finally:
-        lock.release()
 
 
 def _train(args, paths) -> int:

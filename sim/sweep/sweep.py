@@ -81,7 +81,7 @@ def check_backend(backend: str, ray_address: str | None, workers: int) -> None:
     if ray_address is not None and backend != "ray":
         raise SweepError("a Ray address needs the ray backend")
     try:
-        check_workers(workers)
+        check_workers(workers, local=backend != "ray")
     except ConfigError as e:
         raise SweepError(str(e)) from None
     if backend == "ray":
@@ -139,7 +139,7 @@ def _run_locked(settings, cases, out, workers, backend, ray_address, resume, pro
         bar.update(1)
 
     t0 = time.perf_counter()
-    workers = bounded_workers(workers, len(todo)) if todo else workers
+    workers = bounded_workers(workers, len(todo), local=backend != "ray") if todo else workers
     try:
         if todo:
             if backend == "ray":
