@@ -13,7 +13,15 @@ from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 
-from sim.camera import CameraConfig
+from sim.camera import CameraConfig, Pinhole
+from sim.fovea_scene import (
+    FOVEA_CLASSES,
+    FOVEA_EGO_SPEED_MPS,
+    FOVEA_MAX_OTHERS,
+    fovea_camera,
+    fovea_other,
+    fovea_target,
+)
 from sim.ground_truth import GroundTruth
 from sim.scenery import RoadConfig
 from sim.stepping import capture_pose, pair_ground_truth, step_traffic, substeps
@@ -140,6 +148,7 @@ def render_clip(
     bank: TextureBank,
     world: World | None = None,
     ahead_share: float = 0.0,
+    fovea_share: float = 0.0,
 ) -> Clip:
     """Draw a scene from ``sample_seed`` and render ``clip_length`` frames of it.
 
@@ -149,6 +158,9 @@ def render_clip(
     (``_ahead_actor``; the ego then drives at 10-130 km/h, with at most
     ``AHEAD_MAX_OTHER_ACTORS`` random actors). At 0 nothing more is drawn, so the bytes
     are those of the datasets made before the option.
+    ``fovea_share``: the probability that the scene is seen through a fovea instead
+    (:mod:`sim.fovea_scene`: a far target in or near the ego's lane and look-alikes; the
+    images, ground truth and intrinsics are the fovea's). At 0 nothing more is drawn.
 
     Steps, each drawing from the one ``rng`` in this order: the scene (camera, road, ego),
     the world, the actors, the frames; then the ground truth and the metadata.
@@ -156,7 +168,7 @@ def render_clip(
     if world is not None and world.bank is not bank:
         raise ValueError("render_clip: the world must use the given texture bank")
     rng = np.random.default_rng(sample_seed)
-    scene = _draw_scene(rng, base_camera, ahead_share)
+    scene = _draw_scene(rng, base_camera, ahead_share, fovea_share)
     hw_road = build_road(scene.road, seed=sample_seed % (2**31))
     n_sub, sim_dt = substeps(scene.camera.dt_s)
     ego = EgoVehicle(hw_road, 0.0, 0.0, scene.v_ego, EGO_SIZE_M[0], EGO_SIZE_M[1], ActuatorConfig(delay_s=0.0), sim_dt)
@@ -169,8 +181,10 @@ def render_clip(
         world.reset(scene.camera, scene.road, seed=world_seed)
     try:
         actors = _place_actors(rng, world, hw_road, scene)
-        images, frames, states = _render_frames(rng, world, hw_road, ego, actors, scene, clip_length, n_sub, sim_dt)
-        view = scene.camera.wide()
+        view = scene.camera.fovea() if scene.fovea else scene.camera.wide()
+        images, frames, states = _render_frames(
+            rng, world, hw_road, ego, actors, scene, clip_length, n_sub, sim_dt, view
+        )
         gts = [
             pair_ground_truth(view, r1.depth_m, r1.instance, c1, c0, p1, p0, scene.camera.dt_s)
             for (_, c0, p0), (r1, c1, p1) in zip(frames[:-1], frames[1:])
@@ -178,7 +192,7 @@ def render_clip(
     finally:
         if owned:
             world.close()
-    return Clip(images, gts, _clip_meta(sample_seed, scene, actors, states))
+    return Clip(images, gts, _clip_meta(sample_seed, scene, view, actors, states))
 
 
 @dataclass(frozen=True)
@@ -188,9 +202,10 @@ class _Scene:
     v_ego: float  # [m/s]
     ego_decel: float  # [m/s^2]
     ahead: bool  # a braking case ahead
+    fovea: bool = False  # seen through the camera's fovea (sim.fovea_scene)
 
 
-def _draw_scene(rng: np.random.Generator, base_camera: CameraConfig, ahead_share: float) -> _Scene:
+def _draw_scene(rng: np.random.Generator, base_camera: CameraConfig, ahead_share: float, fovea_share: float) -> _Scene:
     camera = random_camera(rng, base_camera)
     road = random_road(rng)
     v_ego = 0.0 if rng.random() < 0.08 else float(rng.uniform(0.0, EGO_MAX_SPEED_MPS))
@@ -198,7 +213,11 @@ def _draw_scene(rng: np.random.Generator, base_camera: CameraConfig, ahead_share
     ahead = ahead_share > 0 and rng.random() < ahead_share
     if ahead:
         v_ego = float(rng.uniform(*AHEAD_EGO_SPEED_MPS))
-    return _Scene(camera, road, v_ego, ego_decel, ahead)
+    fovea = fovea_share > 0 and rng.random() < fovea_share  # drawn only when asked: old datasets keep their bytes
+    if fovea:
+        camera, ahead = fovea_camera(rng, camera), False
+        v_ego = float(rng.uniform(*FOVEA_EGO_SPEED_MPS))
+    return _Scene(camera, road, v_ego, ego_decel, ahead, fovea)
 
 
 def _place_actors(rng, world: World, hw_road, scene: _Scene) -> list:
@@ -206,13 +225,17 @@ def _place_actors(rng, world: World, hw_road, scene: _Scene) -> list:
     actors placed clear of the ego and of each other (5 tries each)."""
     actors = []
     taken = [footprint_corners(0.0, 0.0, 0.0, EGO_SIZE_M[0] + 2.0, EGO_SIZE_M[1] + 1.0)]
-    if scene.ahead:
-        spec = sample_spec(rng, str(rng.choice(AHEAD_CLASSES)))
-        x, y, heading, speed, accel, motion = _ahead_actor(rng, scene.v_ego, spec.length_m, spec.width_m)
+    if scene.ahead or scene.fovea:
+        spec = sample_spec(rng, str(rng.choice(FOVEA_CLASSES if scene.fovea else AHEAD_CLASSES)))
+        draw = fovea_target if scene.fovea else _ahead_actor
+        x, y, heading, speed, accel, motion = draw(rng, scene.v_ego, spec.length_m, spec.width_m)
         taken.append(footprint_corners(x, y, heading, spec.length_m + 1.0, spec.width_m + 0.5))
         veh = ScriptedVehicle(hw_road, x, y, heading, speed, spec.length_m, spec.width_m, accel_mps2=accel)
         hw_road.vehicles.append(veh)
         actors.append((world.add_vehicle(spec), spec, veh, motion))
+    if scene.fovea:
+        _place_fovea_others(rng, world, hw_road, scene, taken, actors)
+        return actors
     for _ in range(int(rng.integers(0, (AHEAD_MAX_OTHER_ACTORS if scene.ahead else MAX_ACTORS) + 1))):
         motion = str(rng.choice(MOTIONS))
         spec = sample_spec(rng, str(rng.choice(CLASSES)))
@@ -232,8 +255,26 @@ def _place_actors(rng, world: World, hw_road, scene: _Scene) -> list:
     return actors
 
 
-def _render_frames(rng, world: World, hw_road, ego, actors, scene: _Scene, clip_length, n_sub, sim_dt):
-    """-> (images, (render, cam_T_world, poses) per frame, the per-frame state records)."""
+def _place_fovea_others(rng, world: World, hw_road, scene: _Scene, taken: list, actors: list) -> None:
+    """Append 0-``FOVEA_MAX_OTHERS`` vehicles a fovea sees beside its target (adjacent,
+    oncoming, a further lead), each clear of the others (5 tries each)."""
+    for _ in range(int(rng.integers(0, FOVEA_MAX_OTHERS + 1))):
+        spec = sample_spec(rng, str(rng.choice(CLASSES)))
+        for _attempt in range(5):
+            x, y, heading, speed, motion = fovea_other(rng, scene.road, scene.v_ego, spec.length_m)
+            corners = footprint_corners(x, y, heading, spec.length_m + 1.0, spec.width_m + 0.5)
+            if not any(footprints_overlap(corners, t) for t in taken):
+                break
+        else:
+            continue
+        taken.append(corners)
+        veh = ScriptedVehicle(hw_road, x, y, heading, speed, spec.length_m, spec.width_m)
+        hw_road.vehicles.append(veh)
+        actors.append((world.add_vehicle(spec), spec, veh, motion))
+
+
+def _render_frames(rng, world: World, hw_road, ego, actors, scene: _Scene, clip_length, n_sub, sim_dt, view: Pinhole):
+    """-> (images, (render, cam_T_world, poses) per frame, the per-frame state records), seen through ``view``."""
     images, frames, states = [], [], []
     t = 0.0
     for k in range(clip_length):
@@ -246,7 +287,7 @@ def _render_frames(rng, world: World, hw_road, ego, actors, scene: _Scene, clip_
             world.set_vehicle_pose(inst, *pose)
         ex, ey, eh = ego.world_pose()
         cam_T_world = capture_pose(scene.camera, rng, (ex, ey, eh))
-        r = world.render(cam_T_world)
+        r = world.render(cam_T_world, pinhole=view)
         images.append(r.rgb)
         frames.append((r, cam_T_world, poses))
         states.append(
@@ -269,15 +310,19 @@ def _render_frames(rng, world: World, hw_road, ego, actors, scene: _Scene, clip_
     return images, frames, states
 
 
-def _clip_meta(sample_seed: int, scene: _Scene, actors, states) -> dict:
+def _clip_meta(sample_seed: int, scene: _Scene, view: Pinhole, actors, states) -> dict:
     camera = scene.camera
-    fx, fy, cx, cy = camera.intrinsics()
+    fx, fy, cx, cy = view.intrinsics()
     cam = asdict(camera)
-    if cam["fovea_zoom"] is None:  # random scenes have one view: their bytes stay those of the earlier datasets
+    extra = {}
+    if cam["fovea_zoom"] is None:  # wide-view scenes: their bytes stay those of the earlier datasets
         del cam["fovea_zoom"]
+    else:  # seen through the fovea: the intrinsics above are the fovea's
+        extra["view"] = {"name": "fovea", "zoom": camera.fovea_zoom}
     return {
         "sample_seed": int(sample_seed),
-        "intrinsics": {"fx_px": fx, "fy_px": fy, "cx_px": cx, "cy_px": cy},
+        **extra,
+        "intrinsics": {"fx_px": float(fx), "fy_px": float(fy), "cx_px": float(cx), "cy_px": float(cy)},
         "dt_s": camera.dt_s,
         "camera": cam,
         "road": asdict(scene.road),

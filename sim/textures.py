@@ -19,6 +19,7 @@ Vehicle styles (``TextureBank(vehicles=...)``):
     and anti-aliased spots 6-22 cm across on a 1.8 m car face, so a vehicle's own scale
     change can be measured inside its outline, not only at its edges (an experiment:
     it did not raise the network's accuracy on actors, see the README).
+    ``"mixed"``: odd texture variants detailed, even ones plain, so one world has both.
 """
 
 from __future__ import annotations
@@ -35,7 +36,7 @@ TEXTURE_SIZE_PX = 128
 
 GROUND_TEXTURE_SIZE_PX = 256  # a 20 m road tile: 8 cm per texel along the road
 GROUND_STYLES = ("detailed", "smooth")
-VEHICLE_STYLES = ("plain", "detailed")
+VEHICLE_STYLES = ("plain", "detailed", "mixed")
 VEHICLE_KINDS = ("paint", "glass")  # the kinds a vehicle style changes
 
 
@@ -194,6 +195,8 @@ class TextureBank:
             raise ValueError(f"unknown texture kind {kind!r}")
         variant %= VARIANTS
         style = self.vehicles if kind in VEHICLE_KINDS else self.ground
+        if style == "mixed":
+            style = "detailed" if variant % 2 else "plain"
         p = self.dir / f"{style}_{kind}_{palette_index}_{variant}.png"
         if not p.exists():
             rng = np.random.default_rng([self.seed, TEXTURE_KINDS.index(kind), palette_index, variant])

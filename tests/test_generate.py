@@ -66,8 +66,12 @@ def test_killed_run_resumes_to_the_same_dataset(tmp_path):
     assert card["splits"]["train"]["samples"] == 10
 
 
-def test_generated_ground_truth_meets_the_closed_forms(tmp_path):
-    generate(tmp_path, SMALL, "val", 3, workers=1, backend="local", progress=False)
+@pytest.mark.parametrize("fovea_share", [0.0, 1.0])
+def test_generated_ground_truth_meets_the_closed_forms(tmp_path, fovea_share):
+    """The stored intrinsics are those of the view rendered (the fovea's for a fovea scene)."""
+    from dataclasses import replace
+
+    generate(tmp_path, replace(SMALL, fovea_share=fovea_share), "val", 3, workers=1, backend="local", progress=False)
     for d in sorted((tmp_path / "val").iterdir()):
         frames, gt, meta = read_sample(d)
         intr, dt = meta["intrinsics"], meta["dt_s"]
@@ -140,6 +144,7 @@ def test_dataset_tensors_have_documented_shapes_and_flip_consistently(tmp_path):
         (["--samples", "2", "--seed", "1", "--ground-texture", "gravel"], "--ground-texture 'gravel'"),
         (["--samples", "2", "--seed", "1", "--vehicle-texture", "chrome"], "--vehicle-texture 'chrome'"),
         (["--samples", "2", "--seed", "1", "--ahead-share", "1.5"], "--ahead-share 1.5"),
+        (["--samples", "2", "--seed", "1", "--fovea-share", "-0.1"], "--fovea-share -0.1"),
     ],
 )
 def test_bad_generate_flags(tmp_path, capsys, argv, needle):
@@ -173,11 +178,12 @@ def test_foreign_or_mismatched_dir_is_refused(tmp_path, capsys):
         ("ground_texture", "smooth", "--ground-texture", "detailed"),
         ("vehicle_texture", "plain", "--vehicle-texture", "detailed"),
         ("ahead_share", "0.0", "--ahead-share", "0.5"),
+        ("fovea_share", "0.0", "--fovea-share", "0.5"),
     ],
 )
 def test_datasets_made_before_a_texture_option_count_as_its_old_style(tmp_path, capsys, key, old_value, flag, other):
     ds = tmp_path / "ds"
-    shown = float(old_value) if key == "ahead_share" else old_value
+    shown = float(old_value) if key.endswith("_share") else old_value
     old = GenerationConfig(seed=3, height_px=48, width_px=144, **{key: shown})
     generate(ds, old, "train", 1, workers=1, backend="local", progress=False)
     gen = ds / "generation.yaml"
@@ -241,3 +247,49 @@ def test_steady_rate_is_reported_only_over_a_long_enough_window(tmp_path):
     assert steady_rate([1.0 + 0.05 * i for i in range(200)], skip=8) == pytest.approx(20.0)
     run = generate(tmp_path / "a", SMALL, "train", 6, workers=1, backend="local", progress=False)
     assert run["written"] == 6 and "steady_samples_per_s" in run and run["steady_samples_per_s"] is None
+
+
+def test_fovea_scenes(tmp_path):
+    """With --fovea-share 1 every sample is seen through a fovea of 5-16 deg vertical field of
+    view centred on the horizon point ahead, with a target in or near the ego's lane 15-150 m
+    ahead; the stored intrinsics are that fovea's, and far in-path vehicles count as in-path."""
+    import math
+    from dataclasses import replace
+
+    from sim.camera import CameraConfig
+    from sim.fovea_scene import FOVEA_RANGE_M, FOVEA_VFOV_DEG
+    from sim.vehicles import EGO_SIZE_M
+
+    cfg = replace(SMALL, fovea_share=1.0, vehicle_texture="mixed")
+    generate(tmp_path / "f", cfg, "train", 8, workers=1, backend="local", progress=False)
+    motions = set()
+    for d in sorted((tmp_path / "f" / "train").iterdir()):
+        _, _, meta = read_sample(d)
+        cam = CameraConfig(**meta["camera"])
+        assert meta["view"] == {"name": "fovea", "zoom": cam.fovea_zoom}
+        vfov_f = 2 * math.degrees(math.atan(math.tan(math.radians(cam.vfov_deg) / 2) / cam.fovea_zoom))
+        assert FOVEA_VFOV_DEG[0] - 1e-3 <= vfov_f <= FOVEA_VFOV_DEG[1] + 1e-3
+        fov = cam.fovea()
+        assert [meta["intrinsics"][k] for k in ("fx_px", "fy_px", "cx_px", "cy_px")] == list(fov.intrinsics())
+        target = meta["actors"][0]
+        motions.add(target["motion"])
+        f0 = meta["frames"][0]
+        ego, a = f0["ego"], next(x for x in f0["actors"] if x["instance"] == target["instance"])
+        assert abs(a["y_m"] - ego["y_m"]) <= 0.75 * (EGO_SIZE_M[1] + target["width_m"]) / 2 + 1e-6
+        gap = a["x_m"] - target["length_m"] / 2 - (ego["x_m"] + EGO_SIZE_M[0] / 2)
+        assert FOVEA_RANGE_M[0] - 1e-6 <= gap <= FOVEA_RANGE_M[1] + 1e-6
+    assert all(m.startswith("fovea-") for m in motions) and len(motions) >= 3
+    items = [TTCDataset(tmp_path / "f", "train")[i] for i in range(8)]
+    assert sum(bool(it["inpath"].any()) for it in items) >= 4  # in the path, however far (80 m times the zoom)
+
+
+def test_mixed_vehicle_style_draws_both_styles(tmp_path):
+    from sim.textures import TextureBank
+
+    mixed = TextureBank(1, tmp_path / "m", vehicles="mixed")
+    plain = TextureBank(1, tmp_path / "p", vehicles="plain")
+    detailed = TextureBank(1, tmp_path / "d", vehicles="detailed")
+    assert plain.path("paint", 1, 2).read_bytes() != detailed.path("paint", 1, 2).read_bytes()
+    for variant, same in ((0, plain), (1, detailed)):
+        assert mixed.path("paint", variant, 2).read_bytes() == same.path("paint", variant, 2).read_bytes()
+    assert mixed.path("asphalt", 1).read_bytes() == plain.path("asphalt", 1).read_bytes()  # ground unchanged

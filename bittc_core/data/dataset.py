@@ -10,6 +10,9 @@ Each item is one frame pair (by default the last pair of the clip), as a dict:
     instance                  int64   (H, W)   -1 sky, 0 static, > 0 vehicle
     inpath                    bool    (H, W)   vehicle pixels within INPATH_HALF_WIDTH_M of the
                                                optical axis, nearer than INPATH_MAX_DEPTH_M
+                                               times the view's zoom (a fovea sample's
+                                               meta["view"]["zoom"], else 1: the same size
+                                               in pixels)
     dt_s                      float32 ()       frame interval [s]
     intrinsics                float32 (4,)     fx, fy, cx, cy [px]
     ego_speed_mps             float32 ()       ego speed at the latest frame [m/s]
@@ -34,7 +37,7 @@ from bittc_core.data.format import SPLITS, read_sample
 from bittc_core.errors import ConfigError
 
 INPATH_HALF_WIDTH_M = 1.5  # [m] |X| of the camera frame: the ego's half width plus a margin
-INPATH_MAX_DEPTH_M = 80.0  # [m]
+INPATH_MAX_DEPTH_M = 80.0  # [m] at the wide view's focal; times the zoom for a fovea sample
 
 
 class TTCDataset(Dataset):
@@ -110,7 +113,8 @@ class TTCDataset(Dataset):
                 np.clip(((x**gamma) * gain - 0.5) * contrast + 0.5 + bright, 0.0, 1.0) for x in (prev, latest)
             )
         lateral_m = np.abs(np.arange(W, dtype=np.float32) - K[2])[None, :] / K[0] * depth
-        inpath = (inst > 0) & valid & (lateral_m < INPATH_HALF_WIDTH_M) & (depth < INPATH_MAX_DEPTH_M)
+        max_depth_m = INPATH_MAX_DEPTH_M * float(meta.get("view", {}).get("zoom", 1.0))
+        inpath = (inst > 0) & valid & (lateral_m < INPATH_HALF_WIDTH_M) & (depth < max_depth_m)
         return {
             "image_prev": torch.from_numpy(np.ascontiguousarray(prev.transpose(2, 0, 1), np.float32)),
             "image_latest": torch.from_numpy(np.ascontiguousarray(latest.transpose(2, 0, 1), np.float32)),

@@ -15,6 +15,7 @@ _FLAGS = {
     "clip_length": "--clip-length",
     "fps_hz": "--fps",
     "ahead_share": "--ahead-share",
+    "fovea_share": "--fovea-share",
     "supersample": "--supersample",
     "ground_texture": "--ground-texture",
     "vehicle_texture": "--vehicle-texture",
@@ -51,8 +52,9 @@ def add_parser(sub) -> argparse.ArgumentParser:
     p.add_argument(
         "--vehicle-texture",
         default="plain",
-        help="vehicle paint and glass: plain (default, as in bittc_v1 and bittc_v2) or detailed (shading "
-        "and spots inside the outline whose motion can be measured, as in bittc_v3)",
+        help="vehicle paint and glass: plain (default, as in bittc_v1 and bittc_v2), detailed (shading "
+        "and spots inside the outline whose motion can be measured, as in bittc_v3) or mixed (half the "
+        "texture variants of each colour plain, half detailed, as in bittc_v5)",
     )
     p.add_argument(
         "--ahead-share",
@@ -62,6 +64,16 @@ def add_parser(sub) -> argparse.ArgumentParser:
         help="this share of the samples has a braking case ahead: a GVT, car, van or truck in or near "
         "the ego's lane (overlap 25-100 %% on either side), stationary, slower or braking, at 0.3-4 s TTC, ego "
         "10-130 km/h, beside the random scene (default 0: random scenes only, as in bittc_v1-v3)",
+    )
+    p.add_argument(
+        "--fovea-share",
+        type=float,
+        default=0.0,
+        metavar="SHARE",
+        help="this share of the samples is seen as a fovea sees it: 5-16 deg vertical field of view centred on "
+        "the horizon point ahead, a GVT, car, van or truck in or near the ego's lane 15-150 m ahead (stationary, "
+        "slower or braking at 0.3-4 s TTC, or a lead at the ego's speed or pulling away), adjacent-lane and "
+        "oncoming vehicles, ego 10-130 km/h (default 0: none, as in bittc_v1-v4)",
     )
     p.add_argument("--workers", type=int, default=1, help="parallel worker processes or Ray tasks (default 1)")
     p.add_argument("--backend", default="local", choices=("local", "ray"), help="local (process pool, default) or ray")
@@ -96,6 +108,7 @@ def _generate(args, h: int, w: int) -> dict:
         ground_texture=args.ground_texture,
         vehicle_texture=args.vehicle_texture,
         ahead_share=args.ahead_share,
+        fovea_share=args.fovea_share,
     )
     return generate(
         Path(args.out),

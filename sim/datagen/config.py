@@ -43,6 +43,7 @@ class GenerationConfig:
     ground_texture: str = "detailed"  # sim.textures.GROUND_STYLES; "smooth" = bittc_v1's ground
     vehicle_texture: str = "plain"  # sim.textures.VEHICLE_STYLES; "detailed" = bittc_v3's vehicles
     ahead_share: float = 0.0  # share of samples with a braking case ahead (sim.random_scene.AHEAD_*)
+    fovea_share: float = 0.0  # share of samples seen through a fovea (sim.fovea_scene)
 
     def __post_init__(self) -> None:
         if self.seed < 0:
@@ -53,6 +54,8 @@ class GenerationConfig:
             raise ConfigError(f"fps_hz {self.fps_hz}: must be in [1, 100] Hz")
         if not 0.0 <= self.ahead_share <= 1.0:
             raise ConfigError(f"ahead_share {self.ahead_share}: must be in [0, 1]")
+        if not 0.0 <= self.fovea_share <= 1.0:
+            raise ConfigError(f"fovea_share {self.fovea_share}: must be in [0, 1]")
         if self.supersample not in (1, 2, 3, 4):
             raise ConfigError(f"supersample {self.supersample}: must be 1, 2, 3 or 4")
         from sim.textures import GROUND_STYLES, VEHICLE_STYLES

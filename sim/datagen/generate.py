@@ -55,6 +55,7 @@ def prepare_dir(out: Path, cfg: GenerationConfig) -> None:
         old.setdefault("ground_texture", "smooth")  # datasets made before the option had the smooth ground
         old.setdefault("vehicle_texture", "plain")  # and the plain vehicles
         old.setdefault("ahead_share", 0.0)  # and no braking cases ahead
+        old.setdefault("fovea_share", 0.0)  # and no fovea scenes
         mine = asdict(cfg)
         for k in sorted(set(old) | set(mine)):
             if old.get(k) != mine.get(k):
@@ -109,7 +110,7 @@ def generate(
         raise ConfigError(f"split {split!r}: must be one of {', '.join(SPLITS)}")
     if not 0 < n_samples <= MAX_SAMPLES_PER_SPLIT:
         raise ConfigError(f"samples {n_samples}: must be in [1, {MAX_SAMPLES_PER_SPLIT}]")
-    check_workers(workers)
+    check_workers(workers, local=backend != "ray")
     if backend not in BACKENDS:
         raise ConfigError(f"backend {backend!r}: must be one of {', '.join(BACKENDS)}")
     if ray_address is not None and backend != "ray":
@@ -119,8 +120,10 @@ def generate(
             import ray  # noqa: F401
         except ImportError:
             raise ConfigError("backend 'ray': Ray is not installed; pip install 'bittc-sim[ray]'") from None
-    prepare_dir(out, cfg)
+    if out.exists() and not out.is_dir():
+        raise ConfigError(f"output folder {str(out)!r}: exists and is not a directory")
     with OutputLock(out, "output folder"):  # a second generator into this folder is refused while this one runs
+        prepare_dir(out, cfg)
         return _generate_locked(out, cfg, split, n_samples, workers, backend, ray_address, progress)
 
 
@@ -139,7 +142,7 @@ def _generate_locked(out, cfg, split, n_samples, workers, backend, ray_address, 
         "backend": backend,
     }
     if todo:
-        workers = run["workers"] = bounded_workers(workers, len(todo))
+        workers = run["workers"] = bounded_workers(workers, len(todo), local=backend != "ray")
         runner = run_ray if backend == "ray" else run_local
         tally = runner(cfg, split_dir, split, todo, workers, ray_address, progress)
         run["written"], run["failed"] = tally.written, sorted(tally.failed)

@@ -79,6 +79,7 @@ def make_sample(cfg_dict: dict, split_dir: str, split: str, index: int) -> tuple
             _WORKER["bank"],
             _WORKER["world"],
             ahead_share=cfg.ahead_share,
+            fovea_share=cfg.fovea_share,
         )
         write_sample(
             Path(split_dir),
