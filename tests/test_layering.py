@@ -219,3 +219,19 @@ def test_no_import_cycle_between_sim_modules():
             seen.add(start)
             visit(start, [start])
     assert not cycles, "\n".join(cycles)
+
+
+MAX_FUNCTION_LINES = 80
+
+
+def test_no_function_outside_tests_is_longer_than_80_lines():
+    """Long functions are split into named steps, each with one job."""
+    long = []
+    for pkg in ("bittc_core", "sim", "controllers", "scenarios", "examples", "bench"):
+        for path in sorted((ROOT / pkg).rglob("*.py")):
+            for node in ast.walk(ast.parse(path.read_text())):
+                if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                    n = node.end_lineno - node.lineno + 1
+                    if n > MAX_FUNCTION_LINES:
+                        long.append(f"{path.relative_to(ROOT)}:{node.lineno} {node.name} ({n} lines)")
+    assert not long, long

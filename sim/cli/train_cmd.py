@@ -60,6 +60,12 @@ def add_parser(sub) -> argparse.ArgumentParser:
     p.add_argument(
         "--stage", default="binary", choices=STAGE_CHOICES, help="flow, binary, continuous or all (default binary)"
     )
+    _add_loss_flags(p)
+    return p
+
+
+def _add_loss_flags(p: argparse.ArgumentParser) -> None:
+    """The flags that shape a stage's loss and what learns."""
     p.add_argument(
         "--actor-weight",
         type=float,
@@ -71,7 +77,7 @@ def add_parser(sub) -> argparse.ArgumentParser:
         type=float,
         default=1.0,
         help="binary stage: loss weight of in-path vehicle pixels (within 1.5 m of the camera's axis, "
-        "nearer than 80 m), instead of --actor-weight there (default 1)",
+        "nearer than 80 m times a fovea sample's zoom), instead of --actor-weight there (default 1)",
     )
     p.add_argument(
         "--lovasz-weight",
@@ -114,7 +120,6 @@ def add_parser(sub) -> argparse.ArgumentParser:
         action="store_true",
         help="continuous stage: train the continuous refinement only, the binary network frozen",
     )
-    return p
 
 
 def _check(args) -> None:
