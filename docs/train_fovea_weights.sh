@@ -1,28 +1,28 @@
 #!/usr/bin/env bash
 # The fovea fine-tune of the shipped weights: one network for both views (shared weights).
 #
-#   1. data: bittc generate --out data/bittc_v5 --fovea-share 0.5 --vehicle-texture mixed --split val   --samples 400  --seed 5 --workers 2
-#            bittc generate --out data/bittc_v5 --fovea-share 0.5 --vehicle-texture mixed --split train --samples 8000 --seed 5 --workers 2
-#   2. this script: bash docs/train_fovea_weights.sh [DATA_V5] [OUT] [RELEASE]
+#   1. data: bittc generate --out data/bittc_v6 --fovea-share 0.5 --vehicle-texture mixed --split val   --samples 400  --seed 6 --workers 2
+#            bittc generate --out data/bittc_v6 --fovea-share 0.5 --vehicle-texture mixed --split train --samples 8000 --seed 6 --workers 2
+#   2. this script: bash docs/train_fovea_weights.sh [DATA_V6] [OUT] [RELEASE]
 #
 # From the shipped release (bittc_core/weights/bittc_default.pt, or START), one binary run on
-# bittc_v5 (half its samples seen through a fovea of 5-16 deg vertical field of view: a far
+# bittc_v6 (half its samples seen through a fovea of 5-16 deg vertical field of view: a far
 # target in or near the ego's lane, threats and look-alikes that close on no one; the other
 # half today's random wide scenes; vehicles plain or textured) with the in-path vehicle pixels
 # weighted, then the frozen continuous stage; its best checkpoint is written to
 # OUT/release.pt with its release name. The config is the shipped one (cpu-small-corr).
 set -euo pipefail
-DATA5=${1:-data/bittc_v5}
-OUT=${2:-runs/fovea}
-RELEASE=${3:-bittc-2026.12-fovea}
+DATA6=${1:-data/bittc_v6}
+OUT=${2:-runs/fovea2}
+RELEASE=${3:-bittc-2026.12-fovea2}
 START=${START:-bittc_core/weights/bittc_default.pt}
 FOVEA_STEPS=${FOVEA_STEPS:-2000}
 CONT_STEPS=${CONT_STEPS:-250}
 mkdir -p "$OUT"
-bittc train --data "$DATA5" --config cpu-small-corr --stage binary --steps "$FOVEA_STEPS" --seed 50 --lr 1e-4 \
+bittc train --data "$DATA6" --config cpu-small-corr --stage binary --steps "$FOVEA_STEPS" --seed 60 --lr 1e-4 \
     --val-every 500 --val-limit 256 --lovasz-weight 0.5 --actor-weight 2 --inpath-weight 4 --lr-mult segnet.corr_=10 \
     --init "$START" --out "$OUT/binary.pt"
-bittc train --data "$DATA5" --config cpu-small-corr --stage continuous --freeze-binary --steps "$CONT_STEPS" \
+bittc train --data "$DATA6" --config cpu-small-corr --stage continuous --freeze-binary --steps "$CONT_STEPS" \
     --warmup-steps 50 --seed 0 --lr 2e-4 --val-every 125 --init "$OUT/binary.pt" --out "$OUT/continuous.pt"
 python -c "import sys; from bittc_core.checkpoint import load_checkpoint, release_payload, save_checkpoint
 p = release_payload(load_checkpoint(sys.argv[1], map_location='cpu')); p['train_meta']['release'] = sys.argv[3]

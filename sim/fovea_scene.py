@@ -39,7 +39,7 @@ FOVEA_TTC_RANGE_S = (0.3, 4.0)  # [s] a threat's bumper TTC at the first frame, 
 FOVEA_EGO_SPEED_MPS = (10 / 3.6, 130 / 3.6)  # [m/s]
 FOVEA_THREAT_MOTIONS = ("stationary", "slower", "braking")
 FOVEA_BENIGN_MOTIONS = ("same-speed", "receding")
-FOVEA_BENIGN_SHARE = 0.35  # share of fovea scenes whose target closes on no one
+FOVEA_BENIGN_SHARE = 0.5  # share of fovea scenes whose target closes on no one
 FOVEA_CLASSES = ("gvt", "car", "van", "truck")
 FOVEA_OVERLAP = (0.25, 1.0)  # |share of the ego's width overlapped|, either side
 FOVEA_OTHER_MOTIONS = ("adjacent", "adjacent", "oncoming", "lead")
@@ -47,11 +47,15 @@ FOVEA_MAX_OTHERS = 4
 
 
 def fovea_camera(rng: np.random.Generator, camera: CameraConfig) -> CameraConfig:
-    """``camera`` (already jittered) with a fovea whose vertical FOV is drawn in ``FOVEA_VFOV_DEG``."""
+    """``camera`` (already jittered) with a fovea whose vertical FOV is drawn in ``FOVEA_VFOV_DEG``.
+
+    The per-frame rotation jitter is divided by the zoom: the fovea magnifies a rotation Z
+    times, so this keeps the jitter in pixels that of the wide scenes (up to about 1.2 px
+    at 0.4 deg and 179 px focal) rather than Z times it."""
     vfov_f = float(rng.uniform(*FOVEA_VFOV_DEG))
     # the fovea's focal is Z times the wide view's, so its FOV is 2 atan(tan(vfov / 2) / Z)
-    zoom = math.tan(math.radians(camera.vfov_deg) / 2) / math.tan(math.radians(vfov_f) / 2)
-    return replace(camera, fovea_zoom=round(max(zoom, 1.0), 6))
+    zoom = max(math.tan(math.radians(camera.vfov_deg) / 2) / math.tan(math.radians(vfov_f) / 2), 1.0)
+    return replace(camera, fovea_zoom=round(zoom, 6), jitter_deg=camera.jitter_deg / zoom)
 
 
 def _gap_for(rng: np.random.Generator, closing_mps: float) -> float:
