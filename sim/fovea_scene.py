@@ -69,6 +69,16 @@ def _log_uniform_gap(rng: np.random.Generator) -> float:
     return float(math.exp(rng.uniform(math.log(FOVEA_RANGE_M[0]), math.log(FOVEA_RANGE_M[1]))))
 
 
+def threat_motion(rng: np.random.Generator, motion: str, v_ego: float) -> tuple[float, float]:
+    """(speed [m/s], acceleration [m/s^2]) of a target ahead that is 'stationary', 'slower'
+    (0-80 % of the ego's speed) or 'braking' (from 30-100 % of it at 2-8 m/s^2)."""
+    if motion == "stationary":
+        return 0.0, 0.0
+    if motion == "slower":
+        return v_ego * float(rng.uniform(0.0, 0.8)), 0.0
+    return v_ego * float(rng.uniform(0.3, 1.0)), -float(rng.uniform(2.0, 8.0))
+
+
 def fovea_target(rng: np.random.Generator, v_ego: float, length_m: float, width_m: float):
     """(x, y, heading, speed, accel, motion) of the target ahead in or near the ego's lane
     (ego frame at the first frame: x forward to the target's centre, y left) [m, rad, m/s, m/s^2]."""
@@ -79,12 +89,7 @@ def fovea_target(rng: np.random.Generator, v_ego: float, length_m: float, width_
         gap = _log_uniform_gap(rng)
     else:
         motion = str(rng.choice(FOVEA_THREAT_MOTIONS))
-        if motion == "stationary":
-            speed = 0.0
-        elif motion == "slower":
-            speed = v_ego * float(rng.uniform(0.0, 0.8))
-        else:
-            speed, accel = v_ego * float(rng.uniform(0.3, 1.0)), -float(rng.uniform(2.0, 8.0))
+        speed, accel = threat_motion(rng, motion, v_ego)
         gap = _gap_for(rng, max(v_ego - speed, 0.5))
     overlap = float(rng.uniform(*FOVEA_OVERLAP)) * float(rng.choice([-1.0, 1.0]))
     y = math.copysign(1.0, overlap) * (1.0 - abs(overlap)) * (EGO_SIZE_M[1] + width_m) / 2

@@ -21,6 +21,7 @@ from sim.fovea_scene import (
     fovea_camera,
     fovea_other,
     fovea_target,
+    threat_motion,
 )
 from sim.ground_truth import GroundTruth
 from sim.scenery import RoadConfig
@@ -127,13 +128,7 @@ def _ahead_actor(rng: np.random.Generator, v_ego: float, length_m: float, width_
     widths): the target's centre sits (1 - |O|) (w_ego + w_target) / 2 to the left
     (O > 0) or right (O < 0) of the ego's."""
     motion = str(rng.choice(AHEAD_MOTIONS))
-    accel = 0.0
-    if motion == "stationary":
-        speed = 0.0
-    elif motion == "slower":
-        speed = v_ego * float(rng.uniform(0.0, 0.8))
-    else:
-        speed, accel = v_ego * float(rng.uniform(0.3, 1.0)), -float(rng.uniform(2.0, 8.0))
+    speed, accel = threat_motion(rng, motion, v_ego)
     ttc = math.exp(rng.uniform(math.log(AHEAD_TTC_RANGE_S[0]), math.log(AHEAD_TTC_RANGE_S[1])))
     gap = float(np.clip(ttc * max(v_ego - speed, 0.5), 2.0, X_RANGE_M[1]))
     overlap = float(rng.uniform(*AHEAD_OVERLAP)) * float(rng.choice([-1.0, 1.0]))
