@@ -57,8 +57,8 @@ def add_camera_flags(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--vehicle-texture",
         default="plain",
-        help="vehicle paint and glass: plain (default, as in datasets bittc_v1 and bittc_v2) or detailed "
-        "(as in bittc_v3)",
+        help="vehicle paint and glass: plain (default, as in datasets bittc_v1 and bittc_v2), detailed "
+        "(as in bittc_v3) or mixed (half the texture variants of each colour detailed, as in bittc_v5 and bittc_v6)",
     )
 
 
