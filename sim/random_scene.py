@@ -234,20 +234,29 @@ def _place_actors(rng, world: World, hw_road, scene: _Scene) -> list:
     for _ in range(int(rng.integers(0, (AHEAD_MAX_OTHER_ACTORS if scene.ahead else MAX_ACTORS) + 1))):
         motion = str(rng.choice(MOTIONS))
         spec = sample_spec(rng, str(rng.choice(CLASSES)))
-        for _attempt in range(5):
-            x, y, heading, speed, accel, keep = _actor_motion(rng, motion, scene.road, scene.v_ego)
-            corners = footprint_corners(x, y, heading, spec.length_m + 1.0, spec.width_m + 0.5)
-            if not any(footprints_overlap(corners, t) for t in taken):
-                break
-        else:
-            continue
-        taken.append(corners)
-        veh = ScriptedVehicle(
-            hw_road, x, y, heading, speed, spec.length_m, spec.width_m, accel_mps2=accel, keep_lateral=keep
+        _place_clear(
+            world, hw_road, taken, actors, spec, lambda m=motion: (*_actor_motion(rng, m, scene.road, scene.v_ego), m)
         )
-        hw_road.vehicles.append(veh)
-        actors.append((world.add_vehicle(spec), spec, veh, motion))
     return actors
+
+
+def _place_clear(world: World, hw_road, taken: list, actors: list, spec, draw) -> None:
+    """Place a vehicle of ``spec`` where ``draw()`` -> (x, y, heading, speed, accel, keep_lateral,
+    motion) puts it clear of every footprint in ``taken`` (5 tries; none fits: not placed),
+    appending its footprint to ``taken`` and (instance, spec, vehicle, motion) to ``actors``."""
+    for _attempt in range(5):
+        x, y, heading, speed, accel, keep, motion = draw()
+        corners = footprint_corners(x, y, heading, spec.length_m + 1.0, spec.width_m + 0.5)
+        if not any(footprints_overlap(corners, t) for t in taken):
+            break
+    else:
+        return
+    taken.append(corners)
+    veh = ScriptedVehicle(
+        hw_road, x, y, heading, speed, spec.length_m, spec.width_m, accel_mps2=accel, keep_lateral=keep
+    )
+    hw_road.vehicles.append(veh)
+    actors.append((world.add_vehicle(spec), spec, veh, motion))
 
 
 def _place_fovea_others(rng, world: World, hw_road, scene: _Scene, taken: list, actors: list) -> None:
@@ -255,17 +264,12 @@ def _place_fovea_others(rng, world: World, hw_road, scene: _Scene, taken: list, 
     oncoming, a further lead), each clear of the others (5 tries each)."""
     for _ in range(int(rng.integers(0, FOVEA_MAX_OTHERS + 1))):
         spec = sample_spec(rng, str(rng.choice(CLASSES)))
-        for _attempt in range(5):
+
+        def draw(spec=spec):
             x, y, heading, speed, motion = fovea_other(rng, scene.road, scene.v_ego, spec.length_m)
-            corners = footprint_corners(x, y, heading, spec.length_m + 1.0, spec.width_m + 0.5)
-            if not any(footprints_overlap(corners, t) for t in taken):
-                break
-        else:
-            continue
-        taken.append(corners)
-        veh = ScriptedVehicle(hw_road, x, y, heading, speed, spec.length_m, spec.width_m)
-        hw_road.vehicles.append(veh)
-        actors.append((world.add_vehicle(spec), spec, veh, motion))
+            return x, y, heading, speed, 0.0, True, motion
+
+        _place_clear(world, hw_road, taken, actors, spec, draw)
 
 
 def _render_frames(rng, world: World, hw_road, ego, actors, scene: _Scene, clip_length, n_sub, sim_dt, view: Pinhole):
