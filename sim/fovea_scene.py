@@ -17,7 +17,8 @@ What a fovea must fence and what it must not:
   the ego's speed or pulling away); overlap 25-100 % of the ego's width on either side
   (Euro NCAP's definition, as ``sim.random_scene``'s braking cases);
 - 0-4 **others** at 15-150 m: vehicles in adjacent lanes (slower, faster, at the same
-  speed), oncoming vehicles in the lanes left of the ego, a further lead in the lane.
+  speed), oncoming vehicles in the lanes left of the ego, another lead in the lane (nearer or
+  further than the target, so it may hide it).
 
 Everything is drawn from the scene's one numpy Generator, so the seed fixes the bytes.
 """
@@ -98,7 +99,7 @@ def fovea_target(rng: np.random.Generator, v_ego: float, length_m: float, width_
 
 def fovea_other(rng: np.random.Generator, road: RoadConfig, v_ego: float, length_m: float):
     """(x, y, heading, speed, motion) of another vehicle 15-150 m ahead: in an adjacent lane,
-    oncoming in a lane left of the ego, or a further lead in the ego's lane."""
+    oncoming in a lane left of the ego, or another lead in the ego's lane (nearer or further than the target)."""
     motion = str(rng.choice(FOVEA_OTHER_MOTIONS))
     x = EGO_SIZE_M[0] / 2 + _log_uniform_gap(rng) + length_m / 2
     heading = 0.0

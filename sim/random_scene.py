@@ -261,7 +261,7 @@ def _place_clear(world: World, hw_road, taken: list, actors: list, spec, draw) -
 
 def _place_fovea_others(rng, world: World, hw_road, scene: _Scene, taken: list, actors: list) -> None:
     """Append 0-``FOVEA_MAX_OTHERS`` vehicles a fovea sees beside its target (adjacent,
-    oncoming, a further lead), each clear of the others (5 tries each)."""
+    oncoming, another lead), each clear of the others (5 tries each)."""
     for _ in range(int(rng.integers(0, FOVEA_MAX_OTHERS + 1))):
         spec = sample_spec(rng, str(rng.choice(CLASSES)))
 
