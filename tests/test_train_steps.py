@@ -10,7 +10,14 @@ from bittc_core.errors import CliError
 from bittc_core.metrics import class_counts, two_class_iou
 from bittc_core.train import TrainConfig
 from bittc_core.train.losses import lovasz_two_class, masked_bce
-from bittc_core.train.targets import PIXEL_THRESHOLD_JITTER, eta_labels, sample_eta_at_pixels, shift_labels
+from bittc_core.train.losses_stage import stage_losses
+from bittc_core.train.targets import (
+    INPATH_THRESHOLD_JITTER,
+    PIXEL_THRESHOLD_JITTER,
+    eta_labels,
+    sample_eta_at_pixels,
+    shift_labels,
+)
 from bittc_core.ttc import tau_to_eta
 from sim.cli import train_cmd
 from tests.train_helpers import cli_args, fit_fixed_batch, make_trainer
@@ -246,6 +253,7 @@ def args(**kw):
         teacher=None,
         distill_weight=None,
         pixel_thresholds=0.0,
+        inpath_thresholds=0.0,
         lr_mult=[],
         keep_checkpoints=False,
     )
@@ -280,6 +288,8 @@ def args(**kw):
         (dict(distill_weight=0.5), "--distill-weight needs --teacher"),
         (dict(pixel_thresholds=1.5), "--pixel-thresholds 1.5"),
         (dict(pixel_thresholds=float("nan")), "--pixel-thresholds nan"),
+        (dict(inpath_thresholds=-0.1), "--inpath-thresholds -0.1"),
+        (dict(pixel_thresholds=0.5, inpath_thresholds=0.75), r"--inpath-thresholds 0.75: must be in \[0, 1 - --pixel"),
         (dict(lr_mult=["segnet.corr_"]), "--lr-mult 'segnet.corr_': expected PREFIX=M"),
         (dict(lr_mult=["=3"]), "--lr-mult '=3'"),
         (dict(lr_mult=["segnet.=0"]), "--lr-mult 'segnet.=0'"),
@@ -338,3 +348,27 @@ def test_pixel_thresholds_sit_at_pixel_eta_in_range():
     assert bool((near(thr[0], 0.9) | near(thr[0], 0.7)).all()) and near(thr[0], 0.7).any()
     for uniform in thr[1], thr[2]:  # spread over the range, not at one value
         assert uniform.min() < lo + 0.1 and uniform.max() > 1.0
+
+
+def test_inpath_thresholds_sit_at_the_inpath_vehicle_eta(tmp_path):
+    """The in-path share of a pair's thresholds lies within INPATH_THRESHOLD_JITTER of its
+    in-path pixels' eta, after the pixel share; a pair without in-path pixels draws uniform."""
+    tr = make_trainer(tmp_path, pixel_threshold_share=0.25, inpath_threshold_share=0.5)
+    batch = next(iter(tr.loader))
+    b, (h, w) = batch["eta"].shape[0], batch["eta"].shape[-2:]
+    batch["eta"] = torch.full((b, h, w), 1.05)
+    batch["eta"][:, :4, :4] = 0.93  # the in-path vehicle of each pair but the last
+    batch["inpath"] = torch.zeros(b, h, w, dtype=torch.bool)
+    batch["inpath"][:-1, :4, :4] = True
+    seen = []
+    real = tr.net.classify_eta
+    tr.net.classify_eta = lambda ctx, feats, thr: seen.append(thr) or real(ctx, feats, thr)
+    stage_losses(tr.net, tr.cfg, batch, torch.Generator().manual_seed(0), torch.device("cpu"))
+    (thr,) = seen
+    k = tr.cfg.thresholds_per_pair
+    at_pixels, at_inpath = round(k * 0.25), round(k * 0.5)
+    inpath = thr[:-1, at_pixels : at_pixels + at_inpath]
+    assert inpath.numel() and bool(((inpath - 0.93).abs() <= INPATH_THRESHOLD_JITTER + 1e-6).all())
+    assert not bool(((thr[-1, at_pixels : at_pixels + at_inpath] - 0.93).abs() <= INPATH_THRESHOLD_JITTER).all())
+    with pytest.raises(ValueError, match="inpath_threshold_share=0.8"):
+        TrainConfig(pixel_threshold_share=0.5, inpath_threshold_share=0.8)

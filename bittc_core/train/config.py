@@ -25,6 +25,10 @@ class TrainConfig:
     # binary stage: this share of each pair's thresholds at the eta of a random valid pixel
     # (jittered; ``train.targets.sample_eta_at_pixels``), the rest uniform
     pixel_threshold_share: float = 0.0
+    # binary stage: this share at the eta of a random in-path vehicle pixel (the vehicle a
+    # braking controller reads; tighter jitter, ``train.targets.INPATH_THRESHOLD_JITTER``),
+    # uniform for a pair without one
+    inpath_threshold_share: float = 0.0
     actor_weight: float = 1.0  # binary TTC loss weight of vehicle pixels, moving or not (instance > 0); scenery 1
     # binary TTC loss weight of in-path vehicle pixels (``data.dataset.INPATH_HALF_WIDTH_M``),
     # instead of actor_weight there: what a braking controller reads
@@ -82,6 +86,11 @@ class TrainConfig:
             raise ValueError(f"distill_weight applies to the binary stage, not {self.stage!r}")
         if not 0.0 <= self.pixel_threshold_share <= 1.0:
             raise ValueError(f"pixel_threshold_share={self.pixel_threshold_share}: must be in [0, 1]")
+        if not 0.0 <= self.inpath_threshold_share <= 1.0 - self.pixel_threshold_share:
+            raise ValueError(
+                f"inpath_threshold_share={self.inpath_threshold_share}: must be in [0, 1 - pixel_threshold_share "
+                f"= {1.0 - self.pixel_threshold_share:g}]"
+            )
         if self.warmup_steps < 0:
             raise ValueError(f"warmup_steps={self.warmup_steps}: must be >= 0")
         for prefix, mult in self.lr_mults:

@@ -17,6 +17,7 @@ from bittc_core.train.config import TrainConfig
 from bittc_core.train.distill import flip_averaged_logits
 from bittc_core.train.losses import lovasz_two_class, masked_bce, masked_smooth_l1
 from bittc_core.train.targets import (
+    INPATH_THRESHOLD_JITTER,
     eta_labels,
     sample_eta,
     sample_eta_at_pixels,
@@ -59,6 +60,18 @@ def stage_losses(
         if at_pixels:
             thr[:, :at_pixels] = sample_eta_at_pixels(
                 eta, mask, at_pixels, c.train_tau_min_s, c.train_eta_max, mc.frame_dt_s, gen
+            )
+        at_inpath = min(round(c.thresholds_per_pair * c.inpath_threshold_share), c.thresholds_per_pair - at_pixels)
+        if at_inpath and "inpath" in batch:  # the built-in synthetic data has no road, no path
+            thr[:, at_pixels : at_pixels + at_inpath] = sample_eta_at_pixels(
+                eta,
+                mask & batch["inpath"],
+                at_inpath,
+                c.train_tau_min_s,
+                c.train_eta_max,
+                mc.frame_dt_s,
+                gen,
+                INPATH_THRESHOLD_JITTER,
             )
         thr = thr.to(device)
         logits = net.classify_eta(ctx, feats[:b], thr)

@@ -3,7 +3,10 @@
 TTC: eta thresholds uniform in [tau_to_eta(train_tau_min_s), train_eta_max] or, for a
 share of them (``TrainConfig.pixel_threshold_share``), at the eta of a random valid pixel
 of the pair in that range plus a uniform jitter of +-``PIXEL_THRESHOLD_JITTER`` (the
-geofence's edge then runs through the image, where the eta has to be read precisely); label
+geofence's edge then runs through the image, where the eta has to be read precisely), and
+for another share (``TrainConfig.inpath_threshold_share``) at the eta of a random in-path
+vehicle pixel plus +-``INPATH_THRESHOLD_JITTER`` (the edge then runs through the vehicle a
+braking controller reads: whether the fence holds it from frame to frame); label
 1[0 < eta <= eta_i] (inside the geofence; thresholds above 1 label every approaching
 and static pixel inside and only faster-receding ones outside).
 Flow: shifts that are multiples of 3 px (one feature pixel) uniform in
@@ -25,18 +28,29 @@ def sample_eta(b: int, k: int, tau_min_s: float, eta_max: float, dt_s: float, ge
 
 
 PIXEL_THRESHOLD_JITTER = 0.02  # [eta] half-width of the jitter of pixel-drawn thresholds
+# [eta] the same for thresholds drawn at in-path vehicle pixels: at 10 Hz, eta 0.96 +- 0.005
+# is tau 2.4 s within about 2.1-2.8 s
+INPATH_THRESHOLD_JITTER = 0.005
 
 
 def sample_eta_at_pixels(
-    eta: torch.Tensor, mask: torch.Tensor, k: int, tau_min_s: float, eta_max: float, dt_s: float, gen: torch.Generator
+    eta: torch.Tensor,
+    mask: torch.Tensor,
+    k: int,
+    tau_min_s: float,
+    eta_max: float,
+    dt_s: float,
+    gen: torch.Generator,
+    jitter_eta: float = PIXEL_THRESHOLD_JITTER,
 ) -> torch.Tensor:
-    """eta, mask (B, H, W) -> (B, k) thresholds at the eta of random valid pixels of each
-    pair in [tau_to_eta(tau_min_s), eta_max], jittered, clipped to that range; uniform
-    for a pair with no such pixel. On the CPU (``gen`` is a CPU generator)."""
+    """eta, mask (B, H, W) -> (B, k) thresholds at the eta of random pixels in ``mask`` of
+    each pair in [tau_to_eta(tau_min_s), eta_max], jittered uniformly by +-``jitter_eta``,
+    clipped to that range; uniform for a pair with no such pixel. On the CPU (``gen`` is a
+    CPU generator)."""
     lo = tau_to_eta(tau_min_s, dt_s)
     eta, mask = eta.detach().cpu(), mask.cpu()
     out = sample_eta(eta.shape[0], k, tau_min_s, eta_max, dt_s, gen)
-    jitter = PIXEL_THRESHOLD_JITTER * (2 * torch.rand(eta.shape[0], k, generator=gen) - 1)
+    jitter = jitter_eta * (2 * torch.rand(eta.shape[0], k, generator=gen) - 1)
     for i in range(eta.shape[0]):
         values = eta[i][mask[i] & (eta[i] >= lo) & (eta[i] <= eta_max)]
         if values.numel():

@@ -94,6 +94,15 @@ def _add_loss_flags(p: argparse.ArgumentParser) -> None:
         "each pair (jittered), the rest uniform (default 0)",
     )
     p.add_argument(
+        "--inpath-thresholds",
+        type=float,
+        default=0.0,
+        metavar="SHARE",
+        help="binary stage: this share of the eta thresholds at the eta of a random in-path vehicle pixel "
+        "of each pair (jittered by +-0.005), beside --pixel-thresholds' share; uniform for a pair without "
+        "one (default 0)",
+    )
+    p.add_argument(
         "--teacher",
         default=None,
         help="binary stage: also learn the flip-averaged maps of this frozen checkpoint (same config; "
@@ -153,6 +162,11 @@ def _check(args) -> None:
         raise CliError(f"--lovasz-weight {args.lovasz_weight}: must be >= 0 and finite")
     if not 0 <= args.pixel_thresholds <= 1:
         raise CliError(f"--pixel-thresholds {args.pixel_thresholds}: must be in [0, 1]")
+    if not 0 <= args.inpath_thresholds <= 1 - args.pixel_thresholds:
+        raise CliError(
+            f"--inpath-thresholds {args.inpath_thresholds}: must be in [0, 1 - --pixel-thresholds "
+            f"= {1 - args.pixel_thresholds:g}]"
+        )
     if args.freeze_binary and args.stage not in ("continuous", "all"):
         raise CliError(f"--freeze-binary applies to the continuous stage, not --stage {args.stage!r}")
     if args.teacher is not None:
@@ -360,6 +374,7 @@ def _stage_configs(args, net, stages, lr_mults, distill_weight) -> dict:
         lovasz_weight=args.lovasz_weight,
         distill_weight=distill_weight,
         pixel_threshold_share=args.pixel_thresholds,
+        inpath_threshold_share=args.inpath_thresholds,
         lr_mults=lr_mults,
         keep_checkpoints=args.keep_checkpoints,
     )
