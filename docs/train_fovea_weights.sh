@@ -9,8 +9,10 @@
 # bittc_v6 (half its samples seen through a fovea of 5-16 deg vertical field of view: a far
 # target in or near the ego's lane, threats and look-alikes that close on no one; the other
 # half today's random wide scenes; vehicles plain or textured) with the in-path vehicle pixels
-# weighted, then the frozen continuous stage; its best checkpoint is written to
-# OUT/release.pt with its release name. The config is the shipped one (cpu-small-corr).
+# weighted (the checkpoint kept is the best by validation mIoU), then the frozen continuous
+# stage; its best checkpoint is written to OUT/release.pt with its release name. Last, the
+# blend: the element-wise mean of START and OUT/release.pt (weight-space ensembling),
+# OUT/blend.pt, named RELEASE-blend. The config is the shipped one (cpu-small-corr).
 set -euo pipefail
 DATA6=${1:-data/bittc_v6}
 OUT=${2:-runs/fovea2}
@@ -24,7 +26,12 @@ bittc train --data "$DATA6" --config cpu-small-corr --stage binary --steps "$FOV
     --init "$START" --out "$OUT/binary.pt"
 bittc train --data "$DATA6" --config cpu-small-corr --stage continuous --freeze-binary --steps "$CONT_STEPS" \
     --warmup-steps 50 --seed 0 --lr 2e-4 --val-every 125 --init "$OUT/binary.pt" --out "$OUT/continuous.pt"
-python -c "import sys; from bittc_core.checkpoint import load_checkpoint, release_payload, save_checkpoint
+name_release() {  # name_release SRC DST NAME: SRC's weights as a release named NAME
+    python -c "import sys; from bittc_core.checkpoint import load_checkpoint, release_payload, save_checkpoint
 p = release_payload(load_checkpoint(sys.argv[1], map_location='cpu')); p['train_meta']['release'] = sys.argv[3]
-save_checkpoint(sys.argv[2], p)" "$OUT/continuous.pt" "$OUT/release.pt" "$RELEASE"
-echo "wrote $OUT/release.pt ($RELEASE); ship it with: cp $OUT/release.pt bittc_core/weights/bittc_default.pt"
+save_checkpoint(sys.argv[2], p)" "$1" "$2" "$3"
+}
+name_release "$OUT/continuous.pt" "$OUT/release.pt" "$RELEASE"
+bittc weights average --out "$OUT/blend.tmp.pt" "$START" "$OUT/release.pt"
+name_release "$OUT/blend.tmp.pt" "$OUT/blend.pt" "$RELEASE-blend" && rm "$OUT/blend.tmp.pt"
+echo "wrote $OUT/release.pt ($RELEASE) and $OUT/blend.pt ($RELEASE-blend); ship one with: cp FILE bittc_core/weights/bittc_default.pt"
