@@ -203,6 +203,11 @@ def summarize(results: list[CaseResult], thresholds_s) -> dict:
                 "fence_lag_wide_s": r.fence_lag_wide_s,
                 "fence_lag_fovea_s": r.fence_lag_fovea_s,
                 "fence_lag_persistent_s": r.fence_lag_persistent_s,
+                # per measured frame: [tau* [s], {'<tau>': share of the actor inside, in the view
+                # that covers most}]: where a fence flickers off before contact
+                "cover_share_by_frame": [
+                    [round(tau, 4), {k: round(v, 4) for k, v in shares.items()}] for tau, shares in r.history
+                ],
                 **(
                     {
                         "stray_frames": r.stray_frames,

@@ -52,6 +52,17 @@ def test_cli_scenario_eval_writes_json_table_and_plot(tmp_path, capsys):
     r = json.loads(out.read_text())
     assert r["thresholds_s"] == [1.6, 2.4] and set(r["fence_lag_s"]) == {"1.6", "2.4"}
     assert "CCRs-40" in r["per_case"] and r["inside_share_by_tau"]["2.4"]
+    frames = r["per_case"]["CCRs-40"]["cover_share_by_frame"]  # the persistent lag again, from the frames
+    taus = [tau for tau, _ in frames]
+    assert len(frames) > 20 and taus[0] > 2.4 and taus[-1] < 1.0
+    lags = r["per_case"]["CCRs-40"]["fence_lag_persistent_s"]
+    assert any(lags[k] is not None for k in ("1.6", "2.4")), lags
+    for k in ("1.6", "2.4"):
+        start = None
+        for tau, shares in frames[: max(j for j, t in enumerate(taus) if t <= float(k)) + 1]:
+            start = (tau if start is None else start) if shares[k] >= 0.5 else None
+        lag = lags[k]
+        assert (lag is None and start is None) or abs(lag - (float(k) - start)) < 1e-3, (k, lag, start)
     assert plot.stat().st_size > 5000 and "median" in capsys.readouterr().out
 
 
