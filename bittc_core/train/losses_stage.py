@@ -27,6 +27,30 @@ from bittc_core.train.targets import (
 )
 
 
+def binary_thresholds(c: TrainConfig, batch: dict, mask: torch.Tensor, dt_s: float, gen: torch.Generator):
+    """(B, thresholds_per_pair) eta thresholds of a binary-stage batch: the pixel share at
+    valid pixels' eta, then the in-path share at in-path vehicle pixels' eta, the rest
+    uniform (``train.targets``)."""
+    eta, k = batch["eta"], c.thresholds_per_pair
+    thr = sample_eta(eta.shape[0], k, c.train_tau_min_s, c.train_eta_max, dt_s, gen)
+    at_pixels = round(k * c.pixel_threshold_share)
+    if at_pixels:
+        thr[:, :at_pixels] = sample_eta_at_pixels(eta, mask, at_pixels, c.train_tau_min_s, c.train_eta_max, dt_s, gen)
+    at_inpath = min(round(k * c.inpath_threshold_share), k - at_pixels)
+    if at_inpath and "inpath" in batch:  # the built-in synthetic data has no road, no path
+        thr[:, at_pixels : at_pixels + at_inpath] = sample_eta_at_pixels(
+            eta,
+            mask & batch["inpath"],
+            at_inpath,
+            c.train_tau_min_s,
+            c.train_eta_max,
+            dt_s,
+            gen,
+            INPATH_THRESHOLD_JITTER,
+        )
+    return thr
+
+
 def stage_losses(
     net: BinaryTTCNet,
     c: TrainConfig,
@@ -55,25 +79,7 @@ def stage_losses(
         return out
     eta = batch["eta"]
     if c.stage == "binary":
-        thr = sample_eta(b, c.thresholds_per_pair, c.train_tau_min_s, c.train_eta_max, mc.frame_dt_s, gen)
-        at_pixels = round(c.thresholds_per_pair * c.pixel_threshold_share)
-        if at_pixels:
-            thr[:, :at_pixels] = sample_eta_at_pixels(
-                eta, mask, at_pixels, c.train_tau_min_s, c.train_eta_max, mc.frame_dt_s, gen
-            )
-        at_inpath = min(round(c.thresholds_per_pair * c.inpath_threshold_share), c.thresholds_per_pair - at_pixels)
-        if at_inpath and "inpath" in batch:  # the built-in synthetic data has no road, no path
-            thr[:, at_pixels : at_pixels + at_inpath] = sample_eta_at_pixels(
-                eta,
-                mask & batch["inpath"],
-                at_inpath,
-                c.train_tau_min_s,
-                c.train_eta_max,
-                mc.frame_dt_s,
-                gen,
-                INPATH_THRESHOLD_JITTER,
-            )
-        thr = thr.to(device)
+        thr = binary_thresholds(c, batch, mask, mc.frame_dt_s, gen).to(device)
         logits = net.classify_eta(ctx, feats[:b], thr)
         weight = None
         if c.actor_weight != 1.0 or c.inpath_weight != 1.0:
