@@ -22,11 +22,8 @@ from bittc_core.model import CONFIGS, BinaryTTCNet, ModelConfig, get_config
 from bittc_core.model.config import GROWTH_COUNTS, GROWTH_FLAGS, GROWTH_SWITCHES
 
 DEFAULT_WEIGHTS = Path(__file__).resolve().parent / "weights" / "bittc_default.pt"
-TRAIN_DEFAULT_HINT = "bash docs/train_default_weights.sh DATA_V1 DATA_V2 OUT (README: Training and the shipped weights)"
+TRAIN_DEFAULT_HINT = "SHIP=1 bash docs/train_fovea_weights.sh DATA_V6 OUT (docs/training.md)"
 REQUIRED_KEYS = ("config", "config_name", "state_dict", "train_meta")
-#: the release name of the shipped file (docs/releases.md), which predates names stored in
-#: checkpoints (``train_meta["release"]``)
-SHIPPED_RELEASE = "bittc-2026.11"
 
 
 class CheckpointError(ConfigError):
@@ -71,13 +68,10 @@ def release_payload(ckpt: dict) -> dict:
     return {k: ckpt[k] for k in REQUIRED_KEYS}
 
 
-def release_name(ckpt: dict, path: str | os.PathLike) -> str | None:
-    """The release name of a loaded checkpoint: ``train_meta["release"]``, the shipped
-    file's name, or None for an unnamed file."""
-    name = ckpt["train_meta"].get("release")
-    if name is None and Path(path).resolve() == DEFAULT_WEIGHTS:
-        name = SHIPPED_RELEASE
-    return name
+def release_name(ckpt: dict) -> str | None:
+    """The release name of a loaded checkpoint (``train_meta["release"]``, docs/releases.md),
+    or None for an unnamed file."""
+    return ckpt["train_meta"].get("release")
 
 
 def load_checkpoint(

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# Reproduce the shipped weights bittc_core/weights/bittc_default.pt on a CPU (or a GPU
-# with --device cuda appended to each train command).
+# Reproduce bittc-2026.11, the base of the shipped weights (docs/train_fovea_weights.sh
+# fine-tunes it for the fovea and ships the blend), on a CPU (or a GPU with --device cuda
+# appended to each train command).
 #   1. data:  bittc generate --out data/bittc_v1 --ground-texture smooth --split {val,test,train} ...
 #             bittc generate --out data/bittc_v2 --split {val,test,train} ...   (see README)
 #   2. this:  bash docs/train_default_weights.sh data/bittc_v1 data/bittc_v2 runs/default
@@ -62,8 +63,9 @@ CORR4_VAL=$((CORR4_STEPS / 4))
 bittc train --data "$DATA2" --config cpu-small-corr --stage binary --steps "$CORR4_STEPS" --seed 20 --lr 1e-4 --val-every "$CORR4_VAL" --val-limit 256 --lovasz-weight 0.5 --actor-weight 2 --lr-mult segnet.corr_=10 --keep-checkpoints --init "$OUT/continuous_corr.pt" --out "$OUT/corr4.pt"
 bittc weights average $(for k in 2 3 4; do printf '%s/corr4.binary.step%06d.pt ' "$OUT" $((k * CORR4_VAL)); done) --out "$OUT/corr4_mean.pt"
 bittc train --data "$DATA2" --config cpu-small-corr --stage continuous --freeze-binary --steps "$CONT_MEAN_STEPS" --warmup-steps 50 --seed 0 --lr 2e-4 --val-every 125 --init "$OUT/corr4_mean.pt" --out "$OUT/continuous_mean.pt"
-# ship the continuous stage's best checkpoint (by val MiD; the binary part is the same in all)
+# the continuous stage's best checkpoint (by val MiD; the binary part is the same in all) is
+# the release bittc-2026.11, the start of the shipped fovea fine-tune and blend
 python -c "import sys; from bittc_core.checkpoint import load_checkpoint, release_payload, save_checkpoint
-save_checkpoint(sys.argv[2], release_payload(load_checkpoint(sys.argv[1], map_location='cpu')))" \
-    "$OUT/continuous_mean.pt" bittc_core/weights/bittc_default.pt
-echo "wrote bittc_core/weights/bittc_default.pt"
+p = release_payload(load_checkpoint(sys.argv[1], map_location='cpu')); p['train_meta']['release'] = 'bittc-2026.11'
+save_checkpoint(sys.argv[2], p)" "$OUT/continuous_mean.pt" "$OUT/release.pt"
+echo "wrote $OUT/release.pt (bittc-2026.11); next: START=$OUT/release.pt SHIP=1 bash docs/train_fovea_weights.sh"

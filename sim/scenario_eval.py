@@ -2,8 +2,8 @@
 
 Every case is rendered with exact ground truth and no braking (the ego keeps its speed
 until the run ends as ``ScenarioSim.done`` says, a collision included). The estimator
-runs on every frame pair (consecutive frames unless told a stride), as the closed loop
-would with no latency, behind the geofence
+runs on every frame pair (each frame and the one ``frame_stride`` frames before it, the
+controller's default unless told), as the closed loop would with no latency, behind the geofence
 controller's evidence rules (``controllers.geofence``), whose decisions are recorded but
 never applied. Per case and threshold tau_i (camera-plane TTC [s] from the latest frame):
 
@@ -31,7 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from controllers.base import BrakeCommand, Controller, Observation
-from controllers.geofence import GeofenceConfig, GeofenceController
+from controllers.geofence import DEFAULT_FRAME_STRIDE, GeofenceConfig, GeofenceController
 from scenarios.spec import ScenarioCase
 from sim.camera import CameraConfig
 from sim.episode import ScenarioSim
@@ -88,7 +88,12 @@ class CaseResult:
 
 
 def evaluate_case(
-    case: ScenarioCase, estimator, thresholds_s, camera: CameraConfig, seed: int = 0, frame_stride: int = 1
+    case: ScenarioCase,
+    estimator,
+    thresholds_s,
+    camera: CameraConfig,
+    seed: int = 0,
+    frame_stride: int = DEFAULT_FRAME_STRIDE,
 ) -> CaseResult:
     """``frame_stride`` 1: consecutive frames, the estimator's own frame interval."""
     cfg = GeofenceConfig(thresholds_s=tuple(thresholds_s), frame_stride=frame_stride)

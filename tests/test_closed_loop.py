@@ -98,7 +98,7 @@ def test_make_refuses_unknown_settings_and_non_controllers():
         (["--controller", "geofence", "--latency", "fixed:x"], "fixed:MS"),
         (["--controller", "geofence", "--latency", "profile:toaster"], "unknown profile 'toaster'"),
         (["--controller", "geofence", "--latency", "sometimes"], "expected measured"),
-        (["--controller", "geofence", "--fps", "1", "--num-alphas", "1"], "frame interval 2 s (1 s x stride 2)"),
+        (["--controller", "geofence", "--fps", "1", "--num-alphas", "1"], "frame interval 3 s (1 s x stride 3)"),
         (["--controller", "geofence", "--frame-stride", "3", "--ttc-thresholds", "0.4"], "frame interval 0.3 s"),
         (["--controller", "oracle", "--num-alphas", "4"], "not 'oracle'"),
     ],

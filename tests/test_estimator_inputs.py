@@ -72,14 +72,15 @@ def test_unsorted_thresholds_only_matter_for_quantized(est):
         est.quantized(frame(0), frame(1), [1.0, 1.0])
 
 
-def test_a_stride_two_stream_extracts_every_frame_once(est):
-    """Pairs (f0, f2), (f1, f3), ...: the closed loop's default frame stride."""
+@pytest.mark.parametrize("stride", [1, 2, 3])
+def test_a_strided_stream_extracts_every_frame_once(est, stride):
+    """Pairs (f0, f_n), (f1, f_n+1), ...: the closed loop's strides up to its default."""
     est.reset()
-    f = [frame(i) for i in range(6)]
+    f = [frame(i) for i in range(6 + stride)]
     n0 = est.feature_computations
-    for i in range(4):
-        est.geofence(f[i], f[i + 2], [1.0])
-    assert est.feature_computations - n0 == 6
+    for i in range(6):
+        est.geofence(f[i], f[i + stride], [1.0])
+    assert est.feature_computations - n0 == 6 + stride
 
 
 def test_streaming_reuses_features_and_matches_uncached(est):

@@ -88,6 +88,18 @@ def test_feature_cache_model_counts_what_the_estimator_extracts():
     assert FeatureCacheModel(0).extractions((0, 1)) == 0  # no cache: nothing counted (flow)
 
 
+def test_the_cache_holds_the_default_stride():
+    """The estimator's LRU cache keeps the older frame of a (k - n, k) stream for n up to the
+    controller's default stride: one extraction a job once the stream runs."""
+    from bittc_core.estimator.streaming import CACHED_FRAMES
+    from controllers.geofence import DEFAULT_FRAME_STRIDE
+
+    n = DEFAULT_FRAME_STRIDE
+    cache = FeatureCacheModel(CACHED_FRAMES)
+    counts = [cache.extractions((k - n, k)) for k in range(n, n + 10)]
+    assert counts[:n] == [2] * n and counts[n:] == [1] * (10 - n)
+
+
 @pytest.mark.parametrize("bad", ["fixed", "fixed:", "fixed:abc", "fixed:-5", "fixed:nan", "profile:nope", "slow", ""])
 def test_malformed_latency_modes_are_refused_by_name(bad):
     with pytest.raises(LatencyError, match="latency"):

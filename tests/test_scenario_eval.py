@@ -41,6 +41,8 @@ def test_cli_scenario_eval_writes_json_table_and_plot(tmp_path, capsys):
                 "--tau",
                 "1.6",
                 "2.4",
+                "--frame-stride",
+                "1",
                 "--out",
                 str(out),
                 "--plot",
@@ -50,7 +52,7 @@ def test_cli_scenario_eval_writes_json_table_and_plot(tmp_path, capsys):
         == 0
     )
     r = json.loads(out.read_text())
-    assert r["thresholds_s"] == [1.6, 2.4] and set(r["fence_lag_s"]) == {"1.6", "2.4"}
+    assert r["thresholds_s"] == [1.6, 2.4] and set(r["fence_lag_s"]) == {"1.6", "2.4"} and r["frame_stride"] == 1
     assert "CCRs-40" in r["per_case"] and r["inside_share_by_tau"]["2.4"]
     frames = r["per_case"]["CCRs-40"]["cover_share_by_frame"]  # the persistent lag again, from the frames
     taus = [tau for tau, _ in frames]

@@ -34,7 +34,11 @@ import torch
 from bittc_core.estimator.base import Estimator, EstimatorInputError
 from bittc_core.model.flip import flip_views, merge_flip_views
 
-CACHED_FRAMES = 4  # a stream of pairs (k - n, k) for every k reuses every frame's features for n <= 3
+#: frames whose features the cache holds: the least recently used is evicted, so a stream of
+#: pairs (k - n, k) for every k (four frames touched between two uses of frame k - n at n = 3)
+#: reuses every frame's features for n <= (CACHED_FRAMES + 1) / 2 = 3, the controller's
+#: default stride; a larger stride extracts the older frame again (and is charged for it)
+CACHED_FRAMES = 5
 TTA_MODES = ("none", "flip")
 
 

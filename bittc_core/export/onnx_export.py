@@ -168,7 +168,7 @@ def _manifest(ckpt: dict, weights, h: int, w: int, entries: dict) -> dict:
         "format": FORMAT,
         "config_name": ckpt["config_name"],
         "model_config": json.loads(json.dumps(asdict(cfg))),
-        "weights": {"file": Path(weights).name, "sha256": sha256_file(weights), "release": release_name(ckpt, weights)},
+        "weights": {"file": Path(weights).name, "sha256": sha256_file(weights), "release": release_name(ckpt)},
         "image": {
             "height_px": h,
             "width_px": w,

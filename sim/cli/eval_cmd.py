@@ -63,9 +63,10 @@ def add_parser(sub) -> argparse.ArgumentParser:
     p.add_argument(
         "--frame-stride",
         type=int,
-        default=1,
+        default=None,
         metavar="N",
-        help="with --scenarios: pair each frame with the one N frames before (default 1)",
+        help="with --scenarios: pair each frame with the one N frames before "
+        "(default: the geofence controller's, 3)",
     )
     p.add_argument(
         "--method",
@@ -126,8 +127,10 @@ def _check(args) -> Path:
         except ConfigError as e:
             raise CliError(f"--tau: {e}") from None
         check_seed(args.seed)
-        from controllers.geofence import check_frame_stride
+        from controllers.geofence import DEFAULT_FRAME_STRIDE, check_frame_stride
 
+        if args.frame_stride is None:
+            args.frame_stride = DEFAULT_FRAME_STRIDE
         try:
             check_frame_stride(args.frame_stride)
         except ConfigError as e:

@@ -46,7 +46,7 @@ def add_controller_flags(p: argparse.ArgumentParser, default: str | None = None)
         type=int,
         default=None,
         metavar="N",
-        help="geofence/flow: pair each frame with the one N frames before (default 2)",
+        help="geofence/flow: pair each frame with the one N frames before (default 3)",
     )
     p.add_argument(
         "--fovea-fences-from",

@@ -132,7 +132,7 @@ def run(args) -> int:
         "weights": {
             "file": Path(weights).name,
             "sha256": sha256_file(weights),
-            "release": release_name(load_checkpoint(weights), weights),
+            "release": release_name(load_checkpoint(weights)),
         },
         "machine": m,
         "versions": profiling.versions(args.backend),

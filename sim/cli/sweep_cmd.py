@@ -63,7 +63,7 @@ def add_parser(sub) -> argparse.ArgumentParser:
     p.add_argument("--resume", action="store_true", help="continue the sweep in --out, skipping finished runs")
     p.add_argument("--weights", default=None, help="geofence: network weights (default: the shipped ones)")
     p.add_argument(
-        "--frame-stride", type=int, default=None, metavar="N", help="geofence/flow: frame stride (default 2)"
+        "--frame-stride", type=int, default=None, metavar="N", help="geofence/flow: frame stride (default 3)"
     )
     p.add_argument("--video", nargs="+", default=[], metavar="CASE", help="also write camera.mp4 for these cases' runs")
     p.add_argument(
