@@ -24,9 +24,9 @@ from sim.latency import parse_latency  # noqa: E402
 from sim.runner import run_case  # noqa: E402
 
 SETTINGS = {  # name -> GeofenceConfig overrides
-    "as shipped (stride 2, persistence 2, nested)": {},
+    "as shipped (stride 3, persistence 2, nested)": {},
     "stride 1": {"frame_stride": 1},
-    "stride 3": {"frame_stride": 3},
+    "stride 2": {"frame_stride": 2},
     "persistence 1": {"persistence_frames": 1},
     "persistence 3": {"persistence_frames": 3},
     "not nested": {"nested": False},
