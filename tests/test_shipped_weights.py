@@ -51,3 +51,14 @@ def test_a_wall_at_one_second_is_inside_the_2s_fence_and_outside_the_half_second
     p = est.geofence(prev, _zoomed(prev, 1.1), [0.5, 2.0])
     inside = (_centre(p) > 0.5).mean(axis=(1, 2))
     assert inside[1] > 0.8 and inside[0] < 0.2, inside.round(3)
+
+
+def test_the_shipped_file_names_its_release_and_the_release_log_marks_it_shipped():
+    from pathlib import Path
+
+    from bittc_core.checkpoint import DEFAULT_WEIGHTS, load_checkpoint, release_name
+
+    name = release_name(load_checkpoint(DEFAULT_WEIGHTS))
+    assert name is not None
+    log = (Path(__file__).resolve().parents[1] / "docs" / "releases.md").read_text()
+    assert f"| **{name}** (shipped) |" in log
