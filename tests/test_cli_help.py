@@ -86,6 +86,15 @@ def test_the_cli_copy_of_the_tta_modes_is_the_estimators():
     assert TTA_MODES == LIBRARY_TTA_MODES
 
 
+def test_every_frame_stride_flag_names_the_controllers_default():
+    from controllers.geofence import DEFAULT_FRAME_STRIDE
+
+    strides = [(path, a) for path, _, a in ACTIONS if "--frame-stride" in a.option_strings]
+    assert {path[1] for path, _ in strides} >= {"run", "suite", "sweep", "eval"}
+    for path, action in strides:
+        assert action.default is None and f"default {DEFAULT_FRAME_STRIDE}" in action.help, path
+
+
 def test_every_seed_flag_has_the_same_bounds():
     seeds = [(path, a) for path, _, a in ACTIONS if "--seed" in a.option_strings]
     assert {path[1] for path, _ in seeds} == {"run", "suite", "generate", "train", "eval"}

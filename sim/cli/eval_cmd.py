@@ -65,7 +65,7 @@ def add_parser(sub) -> argparse.ArgumentParser:
         type=int,
         default=None,
         metavar="N",
-        help="with --scenarios: pair each frame with the one N frames before (default: the geofence controller's, 3)",
+        help="with --scenarios: pair each frame with the one N frames before (default 3, the geofence controller's)",
     )
     p.add_argument(
         "--method",
