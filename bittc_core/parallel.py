@@ -3,10 +3,12 @@
 Workers: a pool never gets more workers than tasks, a count above the machine's cores
 is allowed with a warning (each worker then gets one thread: threads x workers stays
 within the cores), and a count above ``max_workers()`` is refused as a typo. Locks: a
-folder that a running ``sweep``, ``generate`` or ``train`` writes into holds a lock file
-``.bittc.lock`` locked with ``fcntl.flock``; a second run into it is refused with the
-holder's process id. The OS drops the lock when its process dies, so a folder left by a
-killed run is never blocked (``--resume`` works after a SIGKILL).
+folder that a running ``sweep`` writes into holds a lock file ``.bittc.lock`` locked with
+``fcntl.flock``; ``generate`` locks ``.NAME.lock`` beside its dataset folder NAME (the
+dataset holds only the dataset) and ``train`` ``.NAME.lock`` beside its checkpoint
+NAME.pt. A second run into a locked output is refused with the holder's process id. The
+OS drops the lock when its process dies, so an output left by a killed run is never
+blocked (``--resume`` works after a SIGKILL).
 """
 
 from __future__ import annotations
@@ -71,7 +73,18 @@ class OutputLock:
     def __init__(self, folder: str | Path, what: str = "output folder", name: str = LOCK_FILE) -> None:
         self.path = Path(folder) / name
         self.what = what
+        self.target = Path(folder)  # what the messages name
         self._fd: int | None = None
+
+    @classmethod
+    def beside(cls, target: str | Path, what: str = "output folder") -> OutputLock:
+        """A lock on ``target`` held in ``.NAME.lock`` next to it, so that ``target`` holds only
+        what the run writes. Placed beside the resolved path: two spellings of one folder
+        (relative, through a symlink) take the same lock."""
+        real = Path(target).resolve()
+        lock = cls(real.parent, what, name=f".{real.name}.lock")
+        lock.target = Path(target)
+        return lock
 
     def __enter__(self) -> OutputLock:
         return self if self._fd is not None else self.acquire()
@@ -90,14 +103,14 @@ class OutputLock:
             self.path.parent.mkdir(parents=True, exist_ok=True)
             fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
         except OSError as e:
-            raise ConfigError(f"{self.what} {str(self.path.parent)!r}: cannot write there ({e.strerror})") from None
+            raise ConfigError(f"{self.what} {str(self.target)!r}: cannot write there ({e.strerror})") from None
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:
             holder = os.pread(fd, 32, 0).decode(errors="replace").strip() or "unknown"
             os.close(fd)
             raise ConfigError(
-                f"{self.what} {str(self.path.parent)!r} is in use by a running process (pid {holder}); "
+                f"{self.what} {str(self.target)!r} is in use by a running process (pid {holder}); "
                 "wait for it, or choose another folder"
             ) from None
         os.ftruncate(fd, 0)

@@ -20,26 +20,33 @@ from sim.datagen.generate import GenerationConfig, generate
 SMALL = GenerationConfig(seed=3, height_px=48, width_px=144)
 
 
-def sample_files(root: Path, split: str = "train") -> dict[str, bytes]:
-    return {str(p.relative_to(root)): p.read_bytes() for p in sorted((root / split).rglob("*")) if p.is_file()}
+def dataset_files(root: Path) -> dict[str, bytes]:
+    """Every file under ``root``, hidden ones included."""
+    return {str(p.relative_to(root)): p.read_bytes() for p in sorted(root.rglob("*")) if p.is_file()}
 
 
-def test_same_bytes_whatever_the_worker_count(tmp_path):
+def test_same_bytes_in_every_file_whatever_the_worker_count(tmp_path):
+    """The folder holds the dataset only (no lock, no timings), byte for byte the same
+    whether one worker or two made it."""
     generate(tmp_path / "a", SMALL, "train", 6, workers=1, backend="local", progress=False)
     generate(tmp_path / "b", SMALL, "train", 6, workers=2, backend="local", progress=False)
-    fa, fb = sample_files(tmp_path / "a"), sample_files(tmp_path / "b")
-    assert len(fa) == 6 * 4 and fa == fb
-    assert (tmp_path / "a" / "manifest.jsonl").read_bytes() == (tmp_path / "b" / "manifest.jsonl").read_bytes()
+    fa, fb = dataset_files(tmp_path / "a"), dataset_files(tmp_path / "b")
+    assert sorted(fa) == sorted(fb)
+    assert {name for name in fa if "/" not in name} == {"dataset_card.json", "generation.yaml", "manifest.jsonl"}
+    assert len([name for name in fa if name.startswith("train/")]) == 6 * 4
+    for name in fa:
+        assert fa[name] == fb[name], name
+    assert not [name for name in fa if name.endswith(".lock")]
 
 
 def test_ray_backend_gives_the_same_bytes(tmp_path):
     pytest.importorskip("ray")
     generate(tmp_path / "a", SMALL, "train", 4, workers=1, backend="local", progress=False)
     generate(tmp_path / "r", SMALL, "train", 4, workers=2, backend="ray", progress=False)
-    assert sample_files(tmp_path / "a") == sample_files(tmp_path / "r")
+    assert dataset_files(tmp_path / "a") == dataset_files(tmp_path / "r")
 
 
-def test_killed_run_resumes_to_the_same_dataset(tmp_path):
+def test_killed_run_resumes_to_the_same_dataset(tmp_path, capsys):
     ref, killed = tmp_path / "ref", tmp_path / "killed"
     argv = ["--samples", "10", "--seed", "3", "--size", "48x144", "--no-progress"]
     generate(ref, SMALL, "train", 10, workers=1, backend="local", progress=False)
@@ -58,11 +65,12 @@ def test_killed_run_resumes_to_the_same_dataset(tmp_path):
     assert 3 <= len(done) < 10, done
     # a damaged sample must be found and regenerated on resume
     (killed / "train" / done[0] / "gt.npz").write_bytes(b"garbage")
+    capsys.readouterr()
     assert main(["generate", "--out", str(killed), *argv]) == 0
-    assert sample_files(killed) == sample_files(ref)
+    assert json.loads(capsys.readouterr().out)["damaged_regenerated"] == 1
+    assert dataset_files(killed) == dataset_files(ref)  # card and manifest included
     assert not list((killed / "train").glob(".tmp-*"))
     card = json.loads((killed / "dataset_card.json").read_text())
-    assert card["generation_runs"][-1]["damaged_regenerated"] == 1
     assert card["splits"]["train"]["samples"] == 10
 
 
@@ -164,12 +172,23 @@ def test_foreign_or_mismatched_dir_is_refused(tmp_path, capsys):
     (foreign / "notes.txt").write_text("mine")
     assert main(["generate", "--out", str(foreign), "--samples", "1", "--seed", "1", "--no-progress"]) == 2
     assert "not a bittc dataset" in capsys.readouterr().err
+    assert not (tmp_path / ".foreign.lock").exists()  # the refused run took its lock file with it
     ds = tmp_path / "ds"
     generate(ds, SMALL, "train", 1, workers=1, backend="local", progress=False)
     assert (
         main(["generate", "--out", str(ds), "--samples", "1", "--seed", "4", "--size", "48x144", "--no-progress"]) == 2
     )
     assert "seed = 3" in capsys.readouterr().err
+
+
+def test_a_dataset_loses_the_lock_file_older_runs_left_inside(tmp_path):
+    from bittc_core.parallel import LOCK_FILE
+
+    ds = tmp_path / "ds"
+    generate(ds, SMALL, "train", 1, workers=1, backend="local", progress=False)
+    (ds / LOCK_FILE).write_text("123\n")
+    generate(ds, SMALL, "train", 1, workers=1, backend="local", progress=False)
+    assert not (ds / LOCK_FILE).exists()
 
 
 @pytest.mark.parametrize(

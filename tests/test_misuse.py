@@ -50,7 +50,7 @@ def test_more_workers_than_runs_start_one_per_run(tmp_path, capsys):
 
 def test_a_folder_in_use_is_refused_with_the_holders_pid(tmp_path, capsys):
     sweep_out, gen_out = tmp_path / "sw", tmp_path / "gen"
-    with OutputLock(sweep_out), OutputLock(gen_out):
+    with OutputLock(sweep_out), OutputLock.beside(gen_out):
         argv = [
             "sweep",
             "--suite",
@@ -67,6 +67,7 @@ def test_a_folder_in_use_is_refused_with_the_holders_pid(tmp_path, capsys):
         assert main(["generate", "--out", str(gen_out), "--split", "train", "--samples", "1", "--seed", "0"]) == 2
         assert f"pid {os.getpid()}" in capsys.readouterr().err
     assert [p.name for p in sweep_out.iterdir()] == [LOCK_FILE]  # nothing else written
+    assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".")] == [".gen.lock"] and not gen_out.exists()
     # released: the same sweep now runs
     assert main(argv) == 0
 

@@ -76,28 +76,20 @@ def summarize(rows: list[dict]) -> dict:
     }
 
 
-def rebuild_manifest_and_card(out: Path, cfg, run: dict | None = None) -> dict:
+def rebuild_manifest_and_card(out: Path, cfg) -> dict:
+    """Rewrite the manifest and the card from the samples on disk. Both depend on the samples
+    only, never on how they were made (worker count, backend, timings, resumed runs)."""
     rows = scan(out)
     write_text_atomic(
         out / MANIFEST, "".join(json.dumps({k: v for k, v in r.items() if not k.startswith("_")}) + "\n" for r in rows)
     )
-    card_path = out / CARD
-    runs = []
-    if card_path.exists():
-        try:
-            runs = json.loads(card_path.read_text()).get("generation_runs", [])
-        except ValueError:
-            runs = []
-    if run is not None:
-        runs.append(run)
     card = {
         "format_version": FORMAT_VERSION,
         "generation": asdict(cfg),
         "tau_bin_edges_s": list(TAU_BIN_EDGES_S),
         **summarize(rows),
-        "generation_runs": runs,
         "notes": "tau from the latest frame's capture time; histogram over actor pixels (instance > 0) of the "
-        "latest pair; timings in generation_runs vary between machines and runs.",
+        "latest pair.",
     }
-    write_text_atomic(card_path, json.dumps(card, indent=2) + "\n")
+    write_text_atomic(out / CARD, json.dumps(card, indent=2) + "\n")
     return card

@@ -4,7 +4,7 @@ Layout::
 
     DIR/
       generation.yaml         resolved generation config shared by every split
-      dataset_card.json       counts, tau histogram over actor pixels, config, timings
+      dataset_card.json       counts, tau histogram over actor pixels, config
       manifest.jsonl          one line per sample: split, index, seed, path, frames
       train/000000/           one folder per sample (also val/, test/)
         frame_0.png ...       K frames, RGB 8-bit, oldest first (frame_{K-1} is the latest)

@@ -39,6 +39,7 @@ def prepare_dir(out: Path, cfg: GenerationConfig) -> None:
     if out.exists() and not out.is_dir():
         raise ConfigError(f"output folder {str(out)!r}: exists and is not a directory")
     gen = out / "generation.yaml"
+    # LOCK_FILE: where the lock lay before it moved beside the folder; a dataset's old one is removed below
     if out.exists() and any(p.name != LOCK_FILE for p in out.iterdir()):
         if not gen.exists():
             raise ConfigError(
@@ -63,6 +64,7 @@ def prepare_dir(out: Path, cfg: GenerationConfig) -> None:
                     f"output folder {str(out)!r}: was generated with {k} = {old.get(k)!r}, "
                     f"this run asks for {mine.get(k)!r}"
                 )
+        (out / LOCK_FILE).unlink(missing_ok=True)
         return
     try:
         out.mkdir(parents=True, exist_ok=True)
@@ -122,7 +124,9 @@ def generate(
             raise ConfigError("backend 'ray': Ray is not installed; pip install 'bittc-sim[ray]'") from None
     if out.exists() and not out.is_dir():
         raise ConfigError(f"output folder {str(out)!r}: exists and is not a directory")
-    with OutputLock(out, "output folder"):  # a second generator into this folder is refused while this one runs
+    # a second generator into this folder is refused while this one runs; the lock file
+    # lies beside the folder, which holds only the dataset
+    with OutputLock.beside(out, "output folder"):
         prepare_dir(out, cfg)
         return _generate_locked(out, cfg, split, n_samples, workers, backend, ray_address, progress)
 
@@ -153,7 +157,7 @@ def _generate_locked(out, cfg, split, n_samples, workers, backend, ray_address, 
     run["samples_per_s"] = round(run["written"] / run["seconds"], 3) if run["written"] else None
     from bittc_core.data.card import rebuild_manifest_and_card
 
-    rebuild_manifest_and_card(out, cfg, run)
+    rebuild_manifest_and_card(out, cfg)  # the run's statistics (timings, workers) are returned, not stored
     if run["failed"]:
         raise ConfigError(
             f"{len(run['failed'])} sample(s) of {split} failed after {MAX_ATTEMPTS} tries: "
