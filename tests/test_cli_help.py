@@ -60,7 +60,7 @@ def test_enumerated_options_without_choices_list_their_values_in_the_help():
     import controllers
     import scenarios
     from bittc_core.model import CONFIGS
-    from sim.cli.train_cmd import STAGE_CHOICES
+    from sim.cli.train_flags import STAGE_CHOICES
     from sim.textures import GROUND_STYLES, VEHICLE_STYLES
 
     expected = [(c, "--ground-texture", GROUND_STYLES) for c in ("run", "suite", "generate")]
@@ -122,13 +122,13 @@ def test_a_seed_out_of_range_is_refused_by_every_subcommand(tmp_path, capsys, ar
 
 
 def test_train_refuses_a_seed_out_of_range():
-    from sim.cli import train_cmd
+    from sim.cli.train_flags import check_train_flags
 
     args = build_parser().parse_args(
         ["train", "--data", "synthetic", "--config", "tiny", "--out", "m.pt", "--seed", str(MAX_SEED + 1)]
     )
     with pytest.raises(CliError, match="--seed"):
-        train_cmd._check(args)
+        check_train_flags(args)
 
 
 def test_flag_error_names_the_flag_of_a_leading_field():

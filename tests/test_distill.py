@@ -14,6 +14,7 @@ from bittc_core.train.distill import flip_averaged_logits
 from bittc_core.train.losses import masked_bce
 from bittc_core.train.targets import sample_eta, sample_shifts_px, valid_mask
 from sim.cli import train_cmd
+from sim.cli.train_flags import check_train_flags
 from tests import train_helpers
 from tests.train_helpers import cli_args, fit_fixed_batch
 
@@ -149,7 +150,7 @@ def test_train_cli_refuses_a_teacher_of_another_config_or_its_own_output(tmp_pat
     with pytest.raises(CliError, match="is this run's own checkpoint"):
         train_cmd.run(cli_args(tmp_path, "--teacher", own))
     with pytest.raises(CliError, match="--distill-weight 0.0: must be > 0"):
-        train_cmd._check(cli_args(tmp_path, "--teacher", other, "--distill-weight", "0"))
+        check_train_flags(cli_args(tmp_path, "--teacher", other, "--distill-weight", "0"))
 
 
 def test_resume_keeps_the_teacher(tmp_path):

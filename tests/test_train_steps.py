@@ -20,6 +20,7 @@ from bittc_core.train.targets import (
 )
 from bittc_core.ttc import tau_to_eta
 from sim.cli import train_cmd
+from sim.cli.train_flags import check_train_flags
 from tests.train_helpers import cli_args, fit_fixed_batch, make_trainer
 
 
@@ -300,7 +301,7 @@ def args(**kw):
 )
 def test_train_flags_are_validated(kw, match):
     with pytest.raises(CliError, match=match):
-        train_cmd._check(args(**kw))
+        check_train_flags(args(**kw))
 
 
 def test_train_cli_refuses_to_overwrite_a_run(tmp_path):

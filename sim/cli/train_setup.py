@@ -1,0 +1,84 @@
+"""What a `bittc train` run trains: the network (and teacher), the dataset splits and each stage's config."""
+
+from __future__ import annotations
+
+import dataclasses
+
+from bittc_core.errors import CliError, ConfigError
+from sim.cli.common import flag_error
+
+
+def networks(args):
+    """-> (the network to train, the teacher or None, the distillation weight, the device)."""
+    import torch
+
+    from bittc_core.checkpoint import build_network, init_network, load_checkpoint, pick_device
+    from bittc_core.model import BinaryTTCNet, get_config
+
+    try:
+        device = pick_device(args.device)
+        torch.manual_seed(args.seed)
+        net = init_network(args.init, args.config) if args.init else BinaryTTCNet(get_config(args.config))
+    except ConfigError as e:
+        raise flag_error(e, {"device": "--device", "initial checkpoint": "--init"}) from None
+    teacher, distill_weight = None, 0.0
+    if args.teacher:
+        distill_weight = args.distill_weight or 1.0
+        teacher = build_network(load_checkpoint(args.teacher, map_location="cpu"))
+        if teacher.config != net.config:
+            raise CliError(f"--teacher {args.teacher!r}: its model config differs from --config {args.config!r}")
+    return net, teacher, distill_weight, device
+
+
+def open_splits(args, net):
+    """-> (train, val) datasets, refused when their frame interval is not the config's."""
+    from bittc_core.train.data import open_split
+
+    try:
+        train_set = open_split(args.data, "train", augment=True, seed=args.seed)
+        val_set = open_split(args.data, "val", seed=args.seed)
+    except ConfigError as e:
+        raise flag_error(e, {"dataset": "--data"}) from None
+    for name, ds in (("train", train_set), ("val", val_set)):
+        dt = float(ds[0]["dt_s"])
+        if abs(dt - net.config.frame_dt_s) > 1e-6:
+            raise CliError(
+                f"--data {args.data!r}: the {name} split has frame interval dt_s = {dt:g} s, but config "
+                f"{args.config!r} is trained at frame_dt_s = {net.config.frame_dt_s:g} s"
+            )
+    return train_set, val_set
+
+
+def stage_configs(args, net, stages, lr_mults, distill_weight) -> dict:
+    """stage -> its TrainConfig, each checked against the network before anything is written."""
+    from bittc_core.train import TrainConfig
+    from bittc_core.train.params import frozen_prefixes, param_groups
+
+    base = TrainConfig(
+        steps=args.steps,
+        batch_size=args.batch_size,
+        lr=args.lr,
+        warmup_steps=args.warmup_steps,
+        val_every=args.val_every,
+        val_limit=args.val_limit,
+        seed=args.seed,
+        actor_weight=args.actor_weight,
+        inpath_weight=args.inpath_weight,
+        lovasz_weight=args.lovasz_weight,
+        distill_weight=distill_weight,
+        pixel_threshold_share=args.pixel_thresholds,
+        inpath_threshold_share=args.inpath_thresholds,
+        lr_mults=lr_mults,
+        keep_checkpoints=args.keep_checkpoints,
+    )
+    stage_cfgs = {
+        stage: dataclasses.replace(base, stage=stage, freeze_binary=args.freeze_binary and stage == "continuous")
+        for stage in stages
+    }
+    for stage, cfg in stage_cfgs.items():  # before anything is written or trained
+        try:
+            param_groups(net, lr_mults, frozen_prefixes(cfg))
+        except ValueError as err:
+            frozen = " --freeze-binary" if cfg.freeze_binary else ""
+            raise CliError(f"--lr-mult: {err} (config {args.config!r}, --stage {stage}{frozen})") from None
+    return stage_cfgs
