@@ -16,13 +16,14 @@ pytest.importorskip("onnxscript")
 
 from bittc_core.checkpoint import DEFAULT_WEIGHTS, make_payload, save_checkpoint  # noqa: E402
 from bittc_core.estimator import make_estimator  # noqa: E402
-from bittc_core.export.manifest import MANIFEST, ExportError, read_manifest  # noqa: E402
+from bittc_core.export.manifest import FORMAT_ONE_SIZE, MANIFEST, ExportError, read_manifest  # noqa: E402
 from bittc_core.export.onnx_export import export_onnx  # noqa: E402
 from bittc_core.export.parity import Agreement  # noqa: E402
 from bittc_core.model import BinaryTTCNet, get_config  # noqa: E402
 from sim.cli import main  # noqa: E402
 
 SIZE = (24, 48)  # (H, W) of the tiny network's test frames
+HALF = (24, 24)  # (H, W) of a view half as wide (as the fovea beside the wide view)
 
 
 def _tiny_checkpoint(path, seed: int = 0):
@@ -47,16 +48,20 @@ def _zoom_pair(h: int, w: int, seed: int, zoom: float = 1.05):
 def tiny_export(tmp_path_factory):
     d = tmp_path_factory.mktemp("tiny")
     ckpt = _tiny_checkpoint(d / "tiny.pt")
-    export_onnx(ckpt, d / "onnx", height_px=SIZE[0], width_px=SIZE[1])
+    export_onnx(ckpt, d / "onnx", sizes=[SIZE, HALF])
     return ckpt, d / "onnx"
 
 
 def test_tiny_round_trip_matches_torch(tiny_export):
     ckpt, folder = tiny_export
     m = json.loads((folder / MANIFEST).read_text())
-    assert set(m["graphs"]) == {"extractor", "reference", "thresholds", "continuous"}
-    assert m["image"]["height_px"] == SIZE[0] and m["frame_dt_s"] == 0.1
-    eta_in = next(i for i in m["graphs"]["thresholds"]["inputs"] if i["name"] == "eta")
+    assert m["format"] == "bittc-onnx/2" and m["precision"] == "float32" and m["quantization"] is None
+    assert [(s["height_px"], s["width_px"]) for s in m["sizes"]] == [SIZE, HALF]
+    graphs = m["sizes"][0]["graphs"]
+    assert set(graphs) == {"extractor", "reference", "thresholds", "continuous"} and m["frame_dt_s"] == 0.1
+    assert graphs["thresholds"]["file"] == "thresholds_24x48.onnx"
+    assert m["sizes"][1]["graphs"]["thresholds"]["file"] == "thresholds_24x24.onnx"
+    eta_in = next(i for i in graphs["thresholds"]["inputs"] if i["name"] == "eta")
     assert eta_in["shape"] == ["views", "thresholds"]
     ref = make_estimator("bittc", weights=str(ckpt), device="cpu")
     ort = make_estimator("bittc", weights=str(ckpt), backend="onnxruntime", onnx=str(folder))
@@ -66,6 +71,51 @@ def test_tiny_round_trip_matches_torch(tiny_export):
         np.testing.assert_allclose(ort.geofence(a, b, thr), ref.geofence(a, b, thr), atol=2e-5)
         np.testing.assert_allclose(np.log(ort.motion_in_depth(a, b)), np.log(ref.motion_in_depth(a, b)), atol=1e-4)
     assert ort.feature_computations == 6  # the streaming cache: each frame extracted once
+
+
+def test_each_size_runs_its_own_graphs_and_forks_share_them(tiny_export):
+    """A fork of another size (the fovea beside the wide view) runs the graphs of its size."""
+    ckpt, folder = tiny_export
+    ref = make_estimator("bittc", weights=str(ckpt), device="cpu")
+    ort = make_estimator("bittc", weights=str(ckpt), backend="onnxruntime", onnx=str(folder))
+    fovea = ort.fork()
+    assert ort.sizes_px == (SIZE, HALF) and fovea.sessions is ort.sessions
+    thr = [0.5, 1.0, 2.0]
+    for est, size in ((ort, SIZE), (fovea, HALF), (ort, HALF)):
+        a, b = _zoom_pair(*size, 3)
+        np.testing.assert_allclose(est.geofence(a, b, thr), ref.geofence(a, b, thr), atol=2e-5)
+        np.testing.assert_allclose(np.log(est.motion_in_depth(a, b)), np.log(ref.motion_in_depth(a, b)), atol=1e-4)
+
+
+def test_a_one_size_folder_of_the_first_format_still_loads(tiny_export, tmp_path):
+    import shutil
+
+    ckpt, folder = tiny_export
+    old = tmp_path / "old"
+    shutil.copytree(folder, old)
+    m = json.loads((old / MANIFEST).read_text())
+    size = m.pop("sizes")[0]
+    m["image"] |= {"height_px": size["height_px"], "width_px": size["width_px"]}
+    m |= {"format": FORMAT_ONE_SIZE, "graphs": size["graphs"]}
+    del m["precision"], m["quantization"]
+    (old / MANIFEST).write_text(json.dumps(m))
+    ort = make_estimator("bittc", weights=str(ckpt), backend="onnxruntime", onnx=str(old))
+    assert ort.sizes_px == (SIZE,) and ort.precision == "float32"
+    a, b = _zoom_pair(*SIZE, 1)
+    assert ort.geofence(a, b, [1.0]).shape == (1, *SIZE)
+    (old / MANIFEST).write_text(json.dumps(m | {"format": "bittc-onnx/0"}))
+    with pytest.raises(ExportError, match=r"format 'bittc-onnx/0'.*export the weights again"):
+        make_estimator("bittc", backend="onnxruntime", onnx=str(old))
+
+
+def test_export_sizes_are_checked(tmp_path):
+    ckpt = _tiny_checkpoint(tmp_path / "t.pt")
+    for sizes, match in (([SIZE, SIZE], "given twice"), ([(24, 40)], "multiples of 3"), ([], "empty")):
+        with pytest.raises(ExportError, match=match):
+            export_onnx(ckpt, tmp_path / "out", sizes=sizes)
+    with pytest.raises(ExportError, match="one way"):
+        export_onnx(ckpt, tmp_path / "out", sizes=[SIZE], height_px=24)
+    assert not (tmp_path / "out").exists()
 
 
 def test_flip_averaging_matches_torch(tiny_export):
@@ -85,7 +135,7 @@ def test_backend_input_checks_are_the_same(tiny_export):
     with pytest.raises(ValueError, match="uint8"):
         ort.geofence(a.astype(np.float32), b, [1.0])
     big = np.zeros((48, 96, 3), np.uint8)
-    with pytest.raises(ValueError, match=r"\(24, 48\)"):
+    with pytest.raises(ValueError, match=r"\(48, 96\) px.*takes \(24, 48\) or \(24, 24\) px"):
         ort.geofence(big, big, [1.0])
 
 
@@ -104,12 +154,12 @@ def test_missing_or_corrupt_files_are_named(tiny_export, tmp_path):
     _, folder = tiny_export
     bad = tmp_path / "bad"
     shutil.copytree(folder, bad)
-    data = (bad / "thresholds.onnx").read_bytes()
-    (bad / "thresholds.onnx").write_bytes(data[: len(data) // 2])
-    with pytest.raises(ExportError, match="thresholds.onnx.*corrupt"):
+    data = (bad / "thresholds_24x24.onnx").read_bytes()
+    (bad / "thresholds_24x24.onnx").write_bytes(data[: len(data) // 2])
+    with pytest.raises(ExportError, match="thresholds_24x24.onnx.*corrupt"):
         make_estimator("bittc", backend="onnxruntime", onnx=str(bad))
-    (bad / "thresholds.onnx").unlink()
-    with pytest.raises(ExportError, match="thresholds.onnx.*missing"):
+    (bad / "thresholds_24x24.onnx").unlink()
+    with pytest.raises(ExportError, match="thresholds_24x24.onnx.*missing.*24x24 px"):
         read_manifest(bad, graphs=("thresholds",))
     (bad / MANIFEST).write_text("{not json")
     with pytest.raises(ExportError, match="not valid JSON"):

@@ -1,7 +1,8 @@
 """Export a checkpoint's streaming network to an ONNX folder (``bittc export --onnx DIR``).
 
 Each graph of ``bittc_core.export.graphs`` goes through the torch exporter (torch.export,
-dynamic axes V and K), is checked with ``onnx.checker`` and listed with its hash in the
+dynamic axes V and K) once per image size asked for (the warps' padded grid is fixed per
+size), is checked with ``onnx.checker`` and listed with its hash under its size in the
 manifest (``bittc_core.export.manifest``). The folder is written whole or not at all: into
 a temporary folder beside it, renamed at the end; an existing export folder is replaced,
 any other non-empty folder refused.
@@ -18,10 +19,11 @@ import warnings
 from dataclasses import asdict
 from pathlib import Path
 
-from bittc_core.export.manifest import FORMAT, MANIFEST, ExportError, sha256_file
+from bittc_core.export.manifest import FORMAT, MANIFEST, ExportError, graph_file, sha256_file
 
 OPSET = 18
 DEFAULT_SIZE_PX = (96, 288)  # (H, W): the default camera's frames, which the shipped weights were trained on
+SIZE_STRIDE_PX = 3  # [px] image sides are multiples of the feature stride (bittc_core.model.network)
 EXAMPLE_VIEWS = 2  # example sizes of the dynamic axes (not 0 or 1: torch.export would fix them)
 EXAMPLE_THRESHOLDS = 3
 VARARGS_GRAPHS = ("thresholds", "continuous")  # their forward takes *args (the reference terms vary by config)
@@ -86,23 +88,53 @@ def _io(values, names, dynamic) -> list[dict]:
     return out
 
 
+def check_sizes(sizes=None, height_px: int | None = None, width_px: int | None = None) -> list[tuple[int, int]]:
+    """The image sizes (H, W) [px] of an export: ``sizes``, or the one size ``height_px`` x
+    ``width_px`` (each side defaulting to ``DEFAULT_SIZE_PX``'s), not both; distinct, positive
+    multiples of ``SIZE_STRIDE_PX``."""
+    if sizes is None:
+        sizes = [(height_px or DEFAULT_SIZE_PX[0], width_px or DEFAULT_SIZE_PX[1])]
+    elif height_px is not None or width_px is not None:
+        raise ExportError(f"sizes {sizes!r} with height_px / width_px: give the sizes one way")
+    out = []
+    for size in sizes:
+        try:
+            h, w = (int(v) for v in size)
+        except (TypeError, ValueError):
+            raise ExportError(f"image size {size!r}: expected (height_px, width_px)") from None
+        if (h, w) != tuple(size) or h <= 0 or w <= 0 or h % SIZE_STRIDE_PX or w % SIZE_STRIDE_PX:
+            raise ExportError(
+                f"image size {size!r}: height and width must be positive multiples of {SIZE_STRIDE_PX} px"
+            )
+        if (h, w) in out:
+            raise ExportError(f"image size {h}x{w} px: given twice")
+        out.append((h, w))
+    if not out:
+        raise ExportError("sizes is empty: give at least one image size (height_px, width_px)")
+    return out
+
+
 def export_onnx(
-    weights: str | Path, out: str | Path, *, height_px: int | None = None, width_px: int | None = None
+    weights: str | Path,
+    out: str | Path,
+    *,
+    sizes=None,
+    height_px: int | None = None,
+    width_px: int | None = None,
 ) -> dict:
-    """Export ``weights`` into the folder ``out``; -> the manifest. Steps: check the folder,
-    export and check each graph into a private temporary folder, write the manifest, swap
-    the folder in whole."""
+    """Export ``weights`` into the folder ``out`` at every image size of ``sizes`` ((H, W)
+    [px] pairs; or the one size ``height_px`` x ``width_px``, default ``DEFAULT_SIZE_PX``);
+    -> the manifest. Steps: check the folder, export and check each graph into a private
+    temporary folder, write the manifest, swap the folder in whole."""
     require_onnx()
     from bittc_core.checkpoint import build_network, load_checkpoint
-    from bittc_core.export.graphs import GRAPHS
 
+    sizes = check_sizes(sizes, height_px, width_px)
     out = Path(out)
     if out.exists() and (not out.is_dir() or (any(out.iterdir()) and not (out / MANIFEST).is_file())):
         raise ExportError(f"{str(out)!r}: exists and is not an ONNX export folder; choose another folder")
     ckpt = load_checkpoint(weights, map_location="cpu")
     net = build_network(ckpt).eval()
-    h, w = height_px or DEFAULT_SIZE_PX[0], width_px or DEFAULT_SIZE_PX[1]
-    specs = _specs(net, h, w)
     try:
         out.parent.mkdir(parents=True, exist_ok=True)
         tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.", suffix=".partial", dir=out.parent))
@@ -112,8 +144,7 @@ def export_onnx(
     os.umask(umask)
     os.chmod(tmp, 0o777 & ~umask)  # mkdtemp makes it private; the export is an ordinary folder
     try:
-        entries = {name: _export_graph(name, specs[name], tmp) for name in GRAPHS}
-        manifest = _manifest(ckpt, weights, h, w, entries)
+        manifest = _manifest(ckpt, weights, [export_size(net, h, w, tmp) for h, w in sizes])
         (tmp / MANIFEST).write_text(json.dumps(manifest, indent=2) + "\n")
         _swap_in(tmp, out)
         return manifest
@@ -122,13 +153,22 @@ def export_onnx(
         raise
 
 
-def _export_graph(name: str, spec, tmp: Path) -> dict:
-    """One graph exported with torch.onnx (dynamo), checked by onnx; -> its manifest entry."""
+def export_size(net, height_px: int, width_px: int, folder: Path) -> dict:
+    """Every graph of ``net`` at one image size into ``folder``; -> the manifest's size entry."""
+    from bittc_core.export.graphs import GRAPHS
+
+    specs = _specs(net, height_px, width_px)
+    graphs = {name: _export_graph(name, specs[name], folder / graph_file(name, height_px, width_px)) for name in GRAPHS}
+    return {"height_px": height_px, "width_px": width_px, "graphs": graphs}
+
+
+def _export_graph(name: str, spec, path: Path) -> dict:
+    """One graph exported with torch.onnx (dynamo) to ``path``, checked by onnx; -> its
+    manifest entry."""
     import onnx
     import torch
 
     module, args, in_names, out_names, dynamic = spec
-    path = tmp / f"{name}.onnx"
     with warnings.catch_warnings(), torch.no_grad():
         warnings.simplefilter("ignore")
         # a forward(*args) is one parameter to torch.export: its specs go as one tuple
@@ -157,7 +197,7 @@ def _export_graph(name: str, spec, tmp: Path) -> dict:
     }
 
 
-def _manifest(ckpt: dict, weights, h: int, w: int, entries: dict) -> dict:
+def _manifest(ckpt: dict, weights, sizes: list[dict]) -> dict:
     import onnx
     import torch
 
@@ -166,12 +206,11 @@ def _manifest(ckpt: dict, weights, h: int, w: int, entries: dict) -> dict:
     cfg = ckpt["model_config"]
     return {
         "format": FORMAT,
+        "precision": "float32",
         "config_name": ckpt["config_name"],
         "model_config": json.loads(json.dumps(asdict(cfg))),
         "weights": {"file": Path(weights).name, "sha256": sha256_file(weights), "release": release_name(ckpt)},
         "image": {
-            "height_px": h,
-            "width_px": w,
             "layout": "NCHW",
             "channels": "RGB",
             "range": [0.0, 1.0],
@@ -185,7 +224,8 @@ def _manifest(ckpt: dict, weights, h: int, w: int, entries: dict) -> dict:
         ],
         "continuous": {"eta_min": cfg.cont_eta_min, "eta_max": cfg.cont_eta_max, "levels": cfg.cont_levels},
         "opset": OPSET,
-        "graphs": entries,
+        "sizes": sizes,
+        "quantization": None,
         "exporter": {
             "torch": torch.__version__,
             "onnx": onnx.__version__,

@@ -85,9 +85,22 @@ def check_common(args):
     return BenchSettings(config=config, height_px=h, width_px=w, calls=args.calls, threads=args.threads), backends
 
 
-def estimators_for(backends, weights, onnx, size_hw, threads, tmp_dir):
-    """backend -> estimator of the same weights; onnxruntime exports them into ``tmp_dir``
-    when no ``onnx`` folder is given."""
+def view_sizes(size_hw: tuple[int, int], foveas=(None,)) -> list[tuple[int, int]]:
+    """(H, W) [px] of the views the estimator sees: the wide view at ``size_hw`` and the fovea
+    of each zoom of ``foveas`` (None: no fovea)."""
+    from sim.camera import CameraConfig
+
+    sizes = [size_hw]
+    for zoom in foveas:
+        if zoom is not None:
+            fovea = CameraConfig(height_px=size_hw[0], width_px=size_hw[1], fovea_zoom=zoom).fovea()
+            sizes.append((fovea.height_px, fovea.width_px))
+    return list(dict.fromkeys(sizes))
+
+
+def estimators_for(backends, weights, onnx, sizes, threads, tmp_dir):
+    """backend -> estimator of the same weights; onnxruntime exports them at every size of
+    ``sizes`` into ``tmp_dir`` when no ``onnx`` folder is given."""
     import time
 
     import torch
@@ -107,7 +120,7 @@ def estimators_for(backends, weights, onnx, size_hw, threads, tmp_dir):
 
             t0 = time.perf_counter()
             onnx = f"{tmp_dir}/onnx"
-            export_onnx(weights, onnx, height_px=size_hw[0], width_px=size_hw[1])
+            export_onnx(weights, onnx, sizes=sizes)
             print(f"exported {weights} to a temporary ONNX folder in {time.perf_counter() - t0:.0f} s")
         out[b] = make_estimator("bittc", weights=weights, backend="onnxruntime", onnx=onnx)
     return out
@@ -175,19 +188,17 @@ def run(args) -> int:
                 raise CliError(f"--out {args.out!r}: folder {str(out.parent)!r} does not exist")
         if args.config is not None:
             raise CliError("--config with --fovea: the job benchmark times trained weights (--weights)")
-        [parse_fovea(v) for v in args.fovea]  # every value checked before anything is timed
+        foveas = [parse_fovea(v) for v in args.fovea]  # every value checked before anything is timed
+        sizes = view_sizes((settings.height_px, settings.width_px), foveas)
         with tempfile.TemporaryDirectory(prefix="bittc_bench_") as tmp:
-            ests = estimators_for(
-                backends, args.weights, args.onnx, (settings.height_px, settings.width_px), settings.threads, tmp
-            )
+            ests = estimators_for(backends, args.weights, args.onnx, sizes, settings.threads, tmp)
             return run_jobs(args, settings, backends, ests)
     if backends == ["torch"]:
         run_benchmark(settings, weights=args.weights)
         return 0
     with tempfile.TemporaryDirectory(prefix="bittc_bench_") as tmp:
-        ests = estimators_for(
-            backends, args.weights, args.onnx, (settings.height_px, settings.width_px), settings.threads, tmp
-        )
+        sizes = [(settings.height_px, settings.width_px)]
+        ests = estimators_for(backends, args.weights, args.onnx, sizes, settings.threads, tmp)
         run_backend_comparison(settings, ests)
     return 0
 
