@@ -178,9 +178,14 @@ class Controller(ABC):
     cached_frames: int = 0
 
     @property
+    def view_thresholds(self) -> dict[str, int]:
+        """View -> thresholds evaluated on it per job (``num_alphas`` on each by default)."""
+        return {v: self.num_alphas for v in self.views}
+
+    @property
     def job_thresholds(self) -> int:
         """Thresholds evaluated per job, summed over the views."""
-        return self.num_alphas * len(self.views)
+        return sum(self.view_thresholds.values())
 
     def reset(self, calibration: Calibration) -> None:  # noqa: B027 (an optional hook)
         """Forget any state from a previous run; ``calibration`` is this run's car."""

@@ -173,6 +173,20 @@ class GeofenceConfig:
             if not ok:
                 raise ConfigError(f"GeofenceConfig.{name} = {getattr(self, name)!r} is out of range")
 
+    def fences(self, views) -> dict[str, np.ndarray]:
+        """view -> indices into the sorted thresholds evaluated on it: every fence on the
+        wide view, those from ``fovea_fences_from_s`` on on the fovea (refused when none)."""
+        thr = np.sort(np.asarray(self.thresholds_s, dtype=np.float64))
+        out = {"wide": np.arange(len(thr))}
+        if "fovea" in views:
+            out["fovea"] = np.flatnonzero(thr >= self.fovea_fences_from_s - 1e-9)
+            if not out["fovea"].size:
+                raise ConfigError(
+                    f"GeofenceConfig.fovea_fences_from_s = {self.fovea_fences_from_s:g} s leaves the fovea "
+                    f"no fence (largest {thr.max():g} s)"
+                )
+        return out
+
 
 def estimator_thresholds(estimator, thresholds_s, frame_dt_s: float, frame_stride: int = 1) -> np.ndarray:
     """Thresholds [s] for a pair ``frame_stride * frame_dt_s`` apart -> the same
@@ -232,8 +246,8 @@ class GeofenceController(Controller):
         self._warm = False
 
     @property
-    def job_thresholds(self) -> int:
-        return sum(len(f) for f in self._fences.values()) if self.cal is not None else self.num_alphas
+    def view_thresholds(self) -> dict[str, int]:
+        return {v: len(f) for v, f in self._fences.items()} if self.cal is not None else {"wide": self.num_alphas}
 
     def reset(self, calibration: Calibration) -> None:
         self.cal = calibration
@@ -241,14 +255,8 @@ class GeofenceController(Controller):
         self.views = tuple(self._cals)
         self._thr_est = estimator_thresholds(self.estimator, self._thr, calibration.frame_dt_s, self.frame_stride)
         # fence indices (into the sorted thresholds) evaluated per view
-        self._fences = {"wide": np.arange(len(self._thr))}
+        self._fences = self.cfg.fences(self._cals)
         if "fovea" in self._cals:
-            self._fences["fovea"] = np.flatnonzero(self._thr >= self.cfg.fovea_fences_from_s - 1e-9)
-            if not self._fences["fovea"].size:
-                raise ConfigError(
-                    f"GeofenceConfig.fovea_fences_from_s = {self.cfg.fovea_fences_from_s:g} s leaves the fovea "
-                    f"no fence (largest {self._thr.max():g} s)"
-                )
             if "fovea" not in self._estimators:
                 fork = getattr(self.estimator, "fork", None)
                 self._estimators["fovea"] = fork() if fork is not None else self.estimator

@@ -12,16 +12,17 @@ Convention:
 
 Two views of one sensor: the **wide** view is the camera as configured; the **fovea**
 (``fovea_zoom`` Z) is a second pinhole with the same optical centre, the same
-orientation and the same pixel count, focal length x Z, its principal point placed so
-that the ego's road-forward direction (the horizon point straight ahead, at the nominal
-pitch) falls on its centre pixel. It is exactly the crop of a Z-times-larger sensor: a
+orientation and the same height, ``fovea_width_share`` of the width (default half: only
+the road ahead matters at that magnification), focal length x Z, its principal point
+placed so that the ego's road-forward direction (the horizon point straight ahead, at the
+nominal pitch) falls on its centre pixel. It is exactly the crop of a Z-times-larger sensor: a
 3D point at wide pixel (u, v) lies at fovea pixel
 
     u_f = Z (u - cx) + cx_f,    v_f = Z (v - cy) + cy_f
 
 (``fovea_from_wide``; checked in ``tests/test_fovea.py``). Its frustum is off-axis
-(``Pinhole.projection_matrix_gl``), and rendering it costs one more image of the same
-pixel count, not Z^2 more.
+(``Pinhole.projection_matrix_gl``), and rendering it costs one more image of at most the
+same pixel count, not Z^2 more.
 """
 
 from __future__ import annotations
@@ -37,6 +38,9 @@ GL_FROM_CV = np.diag([1.0, -1.0, -1.0, 1.0])
 # x_cam = -y_ego, y_cam = -z_ego, z_cam = x_ego.
 _CV_FROM_EGO_AXES = np.array([[0.0, -1.0, 0.0], [0.0, 0.0, -1.0], [1.0, 0.0, 0.0]])
 MAX_FOVEA_ZOOM = 16.0  # [-] a larger zoom sees under 2 deg at the default 30 deg
+#: [-] the fovea's width over the wide view's: at zoom 4 a 144 px fovea beside a 288 px wide view
+#: spans +-9.7 deg, the ego's corridor (+-1.2 m) from 7 m on, and costs half a full-width view
+DEFAULT_FOVEA_WIDTH_SHARE = 0.5
 VIEWS = ("wide", "fovea")
 
 
@@ -126,6 +130,7 @@ class CameraConfig:
     supersample: int = 1  # render at this factor and average down (anti-aliasing)
     jitter_deg: float = 0.0  # std of per-frame pitch/yaw/roll jitter [deg]
     fovea_zoom: float | None = None  # [-] focal of the fovea over the wide view's; None: no fovea
+    fovea_width_share: float = DEFAULT_FOVEA_WIDTH_SHARE  # [-] the fovea's width over the wide view's
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "fovea_zoom", check_fovea_zoom(self.fovea_zoom))
@@ -138,6 +143,10 @@ class CameraConfig:
             "near_m": 0 < self.near_m < self.far_m,
             "supersample": self.supersample in (1, 2, 3, 4),
             "jitter_deg": 0 <= self.jitter_deg <= 10,
+            "fovea_width_share": isinstance(self.fovea_width_share, (int, float))
+            and not isinstance(self.fovea_width_share, bool)
+            and 0 < self.fovea_width_share <= 1
+            and self.fovea_width_px >= 6,
         }
         for name, ok in checks.items():
             if not ok:
@@ -147,6 +156,14 @@ class CameraConfig:
     def dt_s(self) -> float:
         """Frame interval [s]."""
         return 1.0 / self.fps_hz
+
+    @property
+    def fovea_width_px(self) -> int:
+        """[px] the fovea's width: ``fovea_width_share`` of the wide view's, rounded down to a
+        multiple of 3 (the network's stem stride), the full width at share 1."""
+        if self.fovea_width_share >= 1:
+            return self.width_px
+        return max(3 * int(self.width_px * self.fovea_width_share // 3), 3)
 
     @property
     def aspect(self) -> float:
@@ -173,7 +190,8 @@ class CameraConfig:
         z, wide = self.fovea_zoom, self.wide()
         f = z * wide.fy_px
         cy = (self.height_px - 1) / 2 + f * math.tan(math.radians(self.pitch_deg))
-        return Pinhole(self.height_px, self.width_px, f, f, (self.width_px - 1) / 2, cy, self.near_m, self.far_m)
+        w = self.fovea_width_px
+        return Pinhole(self.height_px, w, f, f, (w - 1) / 2, cy, self.near_m, self.far_m)
 
     def view(self, name: str) -> Pinhole:
         """'wide' or 'fovea' (refused when this camera has none)."""

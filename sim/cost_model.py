@@ -21,12 +21,44 @@ COST_TERMS = ("extract_ms", "view_ms", "threshold_ms", "job_ms")
 
 @dataclass(frozen=True)
 class JobWork:
-    """What one job computed, as a device profile prices it (see the module docstring)."""
+    """What one job computed, as a device profile prices it (see the module docstring).
+
+    Each view counts one in ``views`` (its fixed cost: on a CPU the network's many small
+    operations cost about the same at any size), while its thresholds and extractions count
+    in wide-view equivalents: a view of fewer pixels than the wide view (the fovea, half
+    as wide by default) counts as its pixel share of one (``of_views``)."""
 
     estimator: str | None  # a COST_FAMILIES member, or None (no estimator: the oracle, none)
     views: int = 1  # camera views the estimator ran on (wide, fovea)
-    thresholds: int = 0  # thresholds evaluated, summed over the views
-    extractions: int = 0  # frames x views through the feature extractor
+    thresholds: float = 0  # thresholds evaluated, summed over the views, in wide-view equivalents
+    extractions: float = 0  # frames x views through the feature extractor, in wide-view equivalents
+
+    @classmethod
+    def of_views(
+        cls, view_thresholds: dict, pixel_share: dict, estimator: str | None, extractions_per_view: int
+    ) -> JobWork:
+        """view -> thresholds run on it, view -> its pixels over the wide view's, and the
+        frames each view extracted -> the job's work."""
+        share = [pixel_share[v] for v in view_thresholds]
+        return cls(
+            estimator,
+            len(share),
+            _sum(k * w for k, w in zip(view_thresholds.values(), share)),
+            _sum(extractions_per_view * w for w in share),
+        )
+
+
+def _sum(values) -> float | int:
+    """A sum kept an int where every term is whole (the bytes of traces of full-size views)."""
+    total = sum(values)
+    return int(total) if float(total).is_integer() else round(float(total), 6)
+
+
+def pixel_shares(calibration) -> dict[str, float]:
+    """View -> its pixel count over the wide view's (``controllers.base.Calibration.views``)."""
+    views = calibration.views
+    wide = views["wide"].width_px * views["wide"].height_px
+    return {v: c.width_px * c.height_px / wide for v, c in views.items()}
 
 
 @dataclass(frozen=True)

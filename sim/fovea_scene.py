@@ -56,7 +56,9 @@ def fovea_camera(rng: np.random.Generator, camera: CameraConfig) -> CameraConfig
     vfov_f = float(rng.uniform(*FOVEA_VFOV_DEG))
     # the fovea's focal is Z times the wide view's, so its FOV is 2 atan(tan(vfov / 2) / Z)
     zoom = max(math.tan(math.radians(camera.vfov_deg) / 2) / math.tan(math.radians(vfov_f) / 2), 1.0)
-    return replace(camera, fovea_zoom=round(zoom, 6), jitter_deg=camera.jitter_deg / zoom)
+    # the training fovea spans the full width: the clip is the fovea (sim.camera's narrower
+    # closed-loop fovea is a crop of it, and the network is fully convolutional)
+    return replace(camera, fovea_zoom=round(zoom, 6), jitter_deg=camera.jitter_deg / zoom, fovea_width_share=1.0)
 
 
 def _gap_for(rng: np.random.Generator, closing_mps: float) -> float:

@@ -20,7 +20,7 @@ import numpy as np
 from controllers.base import Calibration, Observation
 from controllers.geofence import GeofenceConfig, GeofenceController, default_thresholds
 from sim.camera import CameraConfig
-from sim.latency import JobWork
+from sim.latency import JobWork, pixel_shares
 from sim.vehicles import EGO_SIZE_M
 
 SPEED_MPS = 20.0  # [m/s] the ego speed the controller reasons with (the corridor, the ground rule)
@@ -39,9 +39,24 @@ class JobSetting:
     def views(self) -> int:
         return 1 if self.fovea_zoom is None else 2
 
-    def work(self, family: str, cached: bool) -> JobWork:
+    def calibration(self, size_hw: tuple[int, int]) -> Calibration:
+        """The car of this setting: the default camera at ``size_hw`` (its fovea, if any, of
+        the default width share)."""
+        camera = CameraConfig(height_px=size_hw[0], width_px=size_hw[1], fovea_zoom=self.fovea_zoom)
+        return Calibration.from_camera(camera, EGO_SIZE_M)
+
+    def controller_config(self) -> GeofenceConfig:
+        return GeofenceConfig(thresholds_s=default_thresholds(self.num_alphas))
+
+    def work(self, family: str, cached: bool, size_hw: tuple[int, int] = (96, 288)) -> JobWork:
+        """What the job computes, in wide-view equivalents (``sim.cost_model.JobWork``)."""
+        cal = self.calibration(size_hw)
         per_view = (2 if self.fresh else 1) if cached else 0
-        return JobWork(family, self.views, self.num_alphas * self.views, per_view * self.views)
+        if self.continuous:
+            counts = {v: 0 for v in cal.views}
+        else:
+            counts = {v: len(i) for v, i in self.controller_config().fences(cal.views).items()}
+        return JobWork.of_views(counts, pixel_shares(cal), family, per_view)
 
 
 def _frames(rng: np.random.Generator, size_hw: tuple[int, int], n: int) -> list[np.ndarray]:
@@ -53,17 +68,15 @@ class _Timed:
 
     def __init__(self, setting: JobSetting, estimator, size_hw, rng, n_rounds: int) -> None:
         self.s = setting
-        camera = CameraConfig(height_px=size_hw[0], width_px=size_hw[1], fovea_zoom=setting.fovea_zoom)
-        self.cal = Calibration.from_camera(camera, EGO_SIZE_M)
+        self.cal = setting.calibration(size_hw)
         fork = getattr(estimator, "fork", None)
         if setting.continuous:
             self.ests = [fork() if fork else estimator for _ in range(setting.views)]
         else:
-            cfg = GeofenceConfig(thresholds_s=default_thresholds(setting.num_alphas))
-            self.ctrl = GeofenceController(fork() if fork else estimator, cfg)
+            self.ctrl = GeofenceController(fork() if fork else estimator, setting.controller_config())
             self.ctrl.reset(self.cal)
         n = 2 * n_rounds if setting.fresh else n_rounds + 1
-        self.frames = [_frames(rng, size_hw, n) for _ in range(setting.views)]
+        self.frames = [_frames(rng, (c.height_px, c.width_px), n) for c in self.cal.views.values()]
 
     def call(self, j: int) -> None:
         a, b = (2 * j, 2 * j + 1) if self.s.fresh else (j, j + 1)

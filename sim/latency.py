@@ -37,7 +37,9 @@ fence runs in every view).
 ``extractions`` counts every frame of every view that went through the feature
 extractor in the job: one per view in a steady stream, two per view after a skip (the
 older frame of the pair was never extracted), none for an estimator without a feature
-cache. ``view_ms`` is the per-view work that does not grow with K (the network's
+cache. Both count in wide-view equivalents: a view of fewer pixels (the fovea, half the
+wide view's width by default) counts its pixel share of one; ``views`` counts each view
+whole (its fixed cost). ``view_ms`` is the per-view work that does not grow with K (the network's
 reference context, the flow field); ``threshold_ms`` the work of one threshold in one
 view, the controller's region pass included; ``job_ms`` the controller's fixed work.
 A controller without an estimator (the oracle) costs nothing under a profile.
@@ -61,6 +63,7 @@ from sim.cost_model import (  # noqa: F401  (re-exported: the latency API)
     JobWork,
     LatencyError,
     parse_costs,
+    pixel_shares,
 )
 from sim.profile_file import read_profile_file
 

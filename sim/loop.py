@@ -50,6 +50,7 @@ from sim.latency import (
     LatencyError,
     LatencyMode,
     next_job,
+    pixel_shares,
 )
 from sim.vehicles import EGO_SIZE_M
 
@@ -114,10 +115,12 @@ class ClosedLoop:
         self.stride = frame_stride
         self.on_capture = on_capture
         self.lag_meter = lag_meter
-        self.estimator, self.views, self.cached_frames = estimator, int(views), int(cached_frames)
-        self.job_thresholds = self.num_alphas * self.views  # thresholds per job over all views
+        self.estimator, self.cached_frames = estimator, int(cached_frames)
         self.frame_dt_s = sim.camera.dt_s
         self.calibration = Calibration.from_camera(sim.camera, EGO_SIZE_M)
+        # view -> thresholds per job (``drive`` takes them from the controller)
+        self.view_thresholds = {v: self.num_alphas for v in tuple(self.calibration.views)[: int(views)]}
+        self._pixel_share = pixel_shares(self.calibration)
         self.timing: dict[str, float] = defaultdict(float)  # [s] wall time per phase
 
     # ------------------------------------------------------------------ public
@@ -190,7 +193,7 @@ class ClosedLoop:
     def _work(self, frame: int) -> JobWork:
         """What the job on ``frame`` computes: its pair's frames not in the feature cache, per view."""
         pair = (frame - self.stride, frame) if self.pairs else (frame,)
-        return JobWork(self.estimator, self.views, self.job_thresholds, self.views * self._cache.extractions(pair))
+        return JobWork.of_views(self.view_thresholds, self._pixel_share, self.estimator, self._cache.extractions(pair))
 
     def drive(self, controller: Controller) -> None:
         """Run to the end with ``controller`` deciding every job (reset with this car's calibration)."""
@@ -201,9 +204,8 @@ class ClosedLoop:
                 "profile should charge: set its estimator_kind ('bittc' or 'flow')"
             )
         self.estimator = controller.estimator_kind
-        self.views = len(controller.views)
         self.cached_frames = controller.cached_frames
-        self.job_thresholds = controller.job_thresholds
+        self.view_thresholds = dict(controller.view_thresholds)
         job = self.reset()
         while job is not None:
             obs = self.observation(job)

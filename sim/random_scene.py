@@ -314,6 +314,8 @@ def _clip_meta(sample_seed: int, scene: _Scene, view: Pinhole, actors, states) -
     fx, fy, cx, cy = view.intrinsics()
     cam = asdict(camera)
     extra = {}
+    if cam["fovea_zoom"] is None or cam["fovea_width_share"] == 1:  # a full-width view
+        del cam["fovea_width_share"]  # (the bytes of the earlier datasets)
     if cam["fovea_zoom"] is None:  # wide-view scenes: their bytes stay those of the earlier datasets
         del cam["fovea_zoom"]
     else:  # seen through the fovea: the intrinsics above are the fovea's

@@ -56,8 +56,8 @@ class OpenLoopProbe(Controller):
         self.estimator_kind, self.cached_frames = inner.estimator_kind, inner.cached_frames
 
     @property
-    def job_thresholds(self) -> int:
-        return self.inner.job_thresholds
+    def view_thresholds(self) -> dict[str, int]:
+        return self.inner.view_thresholds
 
     def reset(self, calibration) -> None:
         self.inner.reset(calibration)

@@ -82,7 +82,7 @@ class World:
         self._client: bullet_client.BulletClient | None = None
         self._tmp = Path(tempfile.mkdtemp(prefix="bittc_world_"))
         self.bank = bank if bank is not None else textures.TextureBank(seed, self._tmp, style.ground, style.vehicles)
-        self._sky: dict[int, np.ndarray] = {}  # render height -> sky image
+        self._sky: dict[tuple[int, int], np.ndarray] = {}  # render (height, width) -> sky image
         self._scenes_on_client = 0
         self.reset(camera, road, seed, light_direction)
 
@@ -127,10 +127,6 @@ class World:
             el = self.rng.uniform(math.radians(25), math.radians(70))
             light_direction = (math.cos(az) * math.cos(el), math.sin(az) * math.cos(el), math.sin(el))
         self.light_direction = tuple(float(v) for v in light_direction)
-        # sky images per render height (output and, when supersampling, the larger render)
-        for h, w in {(camera.height_px * k, camera.width_px * k) for k in (1, camera.supersample)}:
-            if h not in self._sky or self._sky[h].shape[1] != w:
-                self._sky[h] = textures.sky_gradient(h, w, h * 0.5)
         self.add_scenery(build_scenery(road, self.rng))
 
     # ------------------------------------------------------------------ lifecycle
@@ -285,5 +281,7 @@ class World:
             sky = seg < 0
         else:
             sky = np.asarray(depth).reshape(h, w) >= 1.0
-        rgb[sky] = self._sky[h][sky]
+        if (h, w) not in self._sky:  # one per render size (each view, and supersampled renders)
+            self._sky[(h, w)] = textures.sky_gradient(h, w, h * 0.5)
+        rgb[sky] = self._sky[(h, w)][sky]
         return rgb, np.asarray(depth, np.float32).reshape(h, w), seg

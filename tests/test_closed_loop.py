@@ -148,8 +148,9 @@ def test_a_profile_charges_both_views_and_every_extraction(tmp_path):
     rows = (tmp_path / "r" / "trace.csv").read_text().splitlines()
     col = rows[0].split(",").index("latency_ms")
     lat = {float(r.split(",")[col]) for r in rows[1:] if r.split(",")[col]}
-    steady = prof.latency_ms(JobWork("bittc", 2, 4, 2))  # one new frame per view
-    first = prof.latency_ms(JobWork("bittc", 2, 4, 4))  # both frames of the first pairs, in both views
+    # the fovea is half as wide: its thresholds and extractions count half (sim.cost_model.JobWork)
+    steady = prof.latency_ms(JobWork("bittc", 2, 2 + 1, 1 + 0.5))  # one new frame per view
+    first = prof.latency_ms(JobWork("bittc", 2, 2 + 1, 2 + 1))  # both frames of the first pairs, in both views
     assert lat == {round(steady, 2), round(first, 2)} and s["frames_skipped"] == 0
     # the flow baseline is priced by its own terms, not the network's
     flow = run_case(

@@ -26,14 +26,14 @@ def test_a_points_fovea_pixel_is_the_crop_mapping_of_its_wide_pixel(zoom):
     # the crop of a zoom-times larger sensor: pixel offsets from the principal point scale by the zoom
     wide, fov = cam.wide(), cam.fovea()
     np.testing.assert_allclose(uv_fovea[:, 0] - fov.cx_px, zoom * (uv_wide[:, 0] - wide.cx_px))
-    assert fov.fx_px == pytest.approx(zoom * wide.fx_px) and (fov.height_px, fov.width_px) == (96, 288)
+    assert fov.fx_px == pytest.approx(zoom * wide.fx_px) and (fov.height_px, fov.width_px) == (96, 144)
 
 
 def test_the_horizon_point_ahead_lies_at_the_fovea_centre():
     cam = CameraConfig(fovea_zoom=4.0, pitch_deg=2.0)
     far_ahead = cam_T_ego(cam) @ np.array([1e6, 0.0, cam.mount_height_m, 1.0])
     u, v = cam.fovea().project(far_ahead[:3])[0]
-    assert (u, v) == (pytest.approx(143.5), pytest.approx(47.5, abs=1e-3))
+    assert (u, v) == (pytest.approx(71.5), pytest.approx(47.5, abs=1e-3))  # 144 px wide
     # while the wide view has it above its centre, by fy tan(pitch)
     v_wide = cam.wide().project(far_ahead[:3])[0, 1]
     assert v_wide == pytest.approx(47.5 - cam.wide().fy_px * math.tan(math.radians(2.0)), abs=1e-3)
@@ -115,7 +115,7 @@ def test_scenario_ground_truth_in_both_views_from_the_same_code():
         # the same 3D points: the same exact TTC and motion in depth in both views
         assert np.median(fovea.tau_s[pf]) == pytest.approx(np.median(wide.tau_s[pw]), rel=0.02)
         assert np.median(fovea.eta[pf]) == pytest.approx(np.median(wide.eta[pw]), rel=1e-3)
-        assert latest.fovea.rgb.shape == latest.image.shape
+        assert latest.image.shape == (96, 288, 3) and latest.fovea.rgb.shape == (96, 144, 3)  # half as wide
     finally:
         sim.close()
 

@@ -55,14 +55,14 @@ def _check(args):
     return out, (h, w), zoom
 
 
-def _fit(jobs: dict, measured: dict) -> tuple[dict, dict, list[dict]]:
+def _fit(jobs: dict, measured: dict, size_hw: tuple[int, int]) -> tuple[dict, dict, list[dict]]:
     """family -> settings and medians [ms] -> (family -> cost terms, family -> fit residuals, timing rows)."""
     from sim.cost_model import COST_TERMS
     from sim.profile_file import fit_cost_terms
 
     doc_terms, fits, timings = {}, {}, []
     for family, settings in jobs.items():
-        rows = [(s.work(family, cached=family == "bittc"), t) for s, t in zip(settings, measured[family])]
+        rows = [(s.work(family, family == "bittc", size_hw), t) for s, t in zip(settings, measured[family])]
         terms, rms, worst = fit_cost_terms(rows)
         doc_terms[family] = {k: getattr(terms, k) for k in COST_TERMS}
         fits[family] = {"rms_residual_ms": round(rms, 3), "max_residual_ms": round(worst, 3)}
@@ -113,7 +113,7 @@ def run(args) -> int:
     )
     net_ms = time_jobs(est, [*jobs["bittc"], JobSetting(0, continuous=True)], (h, w), args.calls)
     measured = {"bittc": net_ms[:-1], "flow": time_jobs(make_estimator("flow"), jobs["flow"], (h, w), args.calls)}
-    doc_terms, fits, timings = _fit(jobs, measured)
+    doc_terms, fits, timings = _fit(jobs, measured, (h, w))
     m = profiling.machine()
     doc = {
         "name": args.name or m["node"] or "this-machine",

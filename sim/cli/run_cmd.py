@@ -8,7 +8,7 @@ from pathlib import Path
 
 import scenarios
 from bittc_core.errors import CliError
-from sim.camera import CameraConfig
+from sim.camera import DEFAULT_FOVEA_WIDTH_SHARE, CameraConfig
 from sim.cli.common import (
     add_fovea_flag,
     add_seed_flag,
@@ -50,6 +50,13 @@ def add_camera_flags(p: argparse.ArgumentParser) -> None:
     p.add_argument("--supersample", type=int, default=None, help="anti-aliasing factor 1-4 (default 1)")
     add_fovea_flag(p)
     p.add_argument(
+        "--fovea-width",
+        type=float,
+        default=None,
+        metavar="SHARE",
+        help=f"the fovea's width over the wide view's, in (0, 1] (default {DEFAULT_FOVEA_WIDTH_SHARE:g})",
+    )
+    p.add_argument(
         "--ground-texture",
         default="detailed",
         help="road and verges: detailed (default) or smooth (as in dataset bittc_v1)",
@@ -74,6 +81,7 @@ def camera_from_args(args) -> CameraConfig:
         ("camera_height", "mount_height_m"),
         ("jitter_deg", "jitter_deg"),
         ("supersample", "supersample"),
+        ("fovea_width", "fovea_width_share"),
     ):
         if getattr(args, flag) is not None:
             kw[field] = getattr(args, flag)
