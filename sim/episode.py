@@ -3,67 +3,35 @@
 Time: the traffic is integrated at ``sim.stepping.SIM_DT_S`` (100 Hz); the camera captures a frame
 every ``camera.dt_s``; a controller decides once per frame. Frame k is captured at
 t = k * camera.dt_s; its ground truth compares it with frame k-1.
+
+What a run hands out is in ``sim.episode_records``, where its scripted actors start in
+``sim.episode_placement`` and the footprint contact tests in ``sim.episode_contact``.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, replace
-from typing import TYPE_CHECKING
+from dataclasses import dataclass, replace
 
 import numpy as np
 
-from scenarios.spec import ActorSpec, ScenarioCase
-from sim.actor_truth import ActorTruth, actor_truth, footprint_distance
+from scenarios.spec import ScenarioCase
+from sim import episode_contact
+from sim.actor_truth import ActorTruth, actor_truth
 from sim.camera import CameraConfig
+from sim.episode_placement import actor_placement, overlap_offset_m
+from sim.episode_records import Collision, Frame, StepTruth
 from sim.ground_truth import GroundTruth
 from sim.stepping import capture_pose, pair_ground_truth, step_traffic, substeps
 from sim.textures import TextureStyle
 from sim.traffic import ActuatorConfig, EgoVehicle, ScriptedVehicle, TrafficVehicle, build_road
-from sim.vehicles import EGO_SIZE_M, VehicleSpec, footprint_corners, footprints_overlap, sample_spec
+from sim.vehicles import EGO_SIZE_M, VehicleSpec, footprints_overlap, sample_spec
 
-if TYPE_CHECKING:  # the world imports PyBullet, which a run without a camera never needs
-    from sim.world import Render
+__all__ = ["Collision", "Frame", "ScenarioSim", "StepTruth", "overlap_offset_m"]
 
 STANDSTILL_MPS = 0.01  # [m/s]
 POST_COLLISION_S = 1.0  # a run ends this long after the first contact [s] (Euro NCAP)
 VIEW_MARGIN_M = 250.0  # road built this far beyond the furthest vehicle [m]
-
-
-def overlap_offset_m(overlap_pct: float, target_width_m: float, ego_width_m: float = EGO_SIZE_M[1]) -> float:
-    """Lateral offset [m] of the target's centreline from the ego's (+ = left) for an
-    overlap of ``overlap_pct``.
-
-    Euro NCAP: the overlap is the share of the ego's (VUT's) width that overlaps the
-    target, whatever the target's width; O < 0 puts the target on the ego's right. At
-    +-50 % the target's near edge lies on the ego's centreline. At 100 % (or whenever the
-    target is too narrow to cover the requested share) the centrelines are aligned.
-    """
-    shared_m = abs(overlap_pct) / 100.0 * ego_width_m
-    if shared_m >= min(ego_width_m, target_width_m):
-        return 0.0
-    # the target's near edge lies ``shared_m`` inside the ego's far side
-    return math.copysign((ego_width_m + target_width_m) / 2 - shared_m, overlap_pct)
-
-
-@dataclass(frozen=True)
-class Collision:
-    t_s: float
-    instance: int
-    impact_speed_mps: float  # ego speed at first contact [m/s]
-    relative_impact_speed_mps: float  # ego minus actor speed along the ego's heading [m/s]
-
-
-@dataclass
-class StepTruth:
-    """Ground truth at a frame. Never part of what a (non-oracle) policy observes."""
-
-    t_s: float
-    ego_speed_mps: float
-    actors: list[ActorTruth]
-    critical: ActorTruth | None  # in-path actor ahead with the smallest TTC
-    gt: GroundTruth | None = None  # per-pixel maps (only when the camera renders)
-    collision: Collision | None = None
 
 
 @dataclass
@@ -72,29 +40,6 @@ class _Actor:
     spec: VehicleSpec
     vehicle: ScriptedVehicle | TrafficVehicle
     initial_speed_mps: float
-
-
-@dataclass
-class Frame:
-    """A captured frame: the wide view's image (H, W, 3) uint8, exact depth and instances,
-    the fovea's render (``sim.world.Render``, same pose) when the camera has one, and the
-    poses (world x [m], y [m], heading [rad]) of every actor at capture time."""
-
-    t_s: float
-    image: np.ndarray | None
-    cam_T_world: np.ndarray
-    poses: dict[int, tuple[float, float, float]] = field(default_factory=dict)
-    depth_m: np.ndarray | None = None
-    instance: np.ndarray | None = None
-    fovea: Render | None = None
-
-    def view(self, name: str) -> tuple[np.ndarray | None, np.ndarray | None, np.ndarray | None]:
-        """(image, depth_m, instance) of view 'wide' or 'fovea' (Nones where not rendered)."""
-        if name == "wide":
-            return self.image, self.depth_m, self.instance
-        if self.fovea is None:
-            return None, None, None
-        return self.fovea.rgb, self.fovea.depth_m, self.fovea.instance
 
 
 class ScenarioSim:
@@ -138,7 +83,7 @@ class ScenarioSim:
         far_x = 0.0
         for a in case.actors:
             spec = sample_spec(rng, a.vehicle)
-            x, y, heading = self._placement(a, spec, v_ego)
+            x, y, heading = actor_placement(a, spec, v_ego, case.road)
             placements.append((a, spec, x, y, heading))
             far_x = max(far_x, x + (a.speed_kph / 3.6 if a.direction == "same" else 0.0) * case.duration_s)
         far_x = max(far_x, v_ego * case.duration_s) + VIEW_MARGIN_M
@@ -171,14 +116,6 @@ class ScenarioSim:
             self._add_actor(spec, veh)
         self._add_background_traffic(v_ego)
 
-    def _placement(self, a: ActorSpec, spec: VehicleSpec, v_ego: float) -> tuple[float, float, float]:
-        """Initial (x, y, heading) of a scripted actor from Euro NCAP-style parameters."""
-        gap = a.headway_m if a.headway_m is not None else a.headway_s * v_ego
-        x = EGO_SIZE_M[0] / 2 + gap + spec.length_m / 2
-        y = self.case.road.lane_center_y_m(a.lane) + overlap_offset_m(a.overlap_pct, spec.width_m)
-        heading = 0.0 if a.direction == "same" else math.pi
-        return x, y, heading
-
     def _add_actor(self, spec: VehicleSpec, veh) -> None:
         self.road.vehicles.append(veh)
         instance = self.world.add_vehicle(spec) if self.world is not None else len(self.actors) + 1
@@ -192,20 +129,12 @@ class ScenarioSim:
             x = float(self.rng.uniform(-30.0, 150.0))
             speed = max(0.0, v_ego + float(self.rng.uniform(-8.0, 8.0)))
             veh = TrafficVehicle(self.road, x, self.road_cfg.lane_center_y_m(lane), speed, spec.length_m, spec.width_m)
-            if any(footprints_overlap(self._corners(veh, spec), self._corners(o.vehicle, o.spec)) for o in self.actors):
+            corners = episode_contact.vehicle_corners
+            if any(footprints_overlap(corners(veh, spec), corners(o.vehicle, o.spec)) for o in self.actors):
                 continue
             self._add_actor(spec, veh)
 
     # ------------------------------------------------------------------ state
-    @staticmethod
-    def _corners(veh, spec: VehicleSpec) -> np.ndarray:
-        x, y, h = veh.world_pose()
-        return footprint_corners(x, y, h, spec.length_m, spec.width_m)
-
-    def _ego_corners(self) -> np.ndarray:
-        x, y, h = self.ego.world_pose()
-        return footprint_corners(x, y, h, EGO_SIZE_M[0], EGO_SIZE_M[1])
-
     def actor_truths(self) -> list[ActorTruth]:
         ego_pose = self.ego.world_pose()
         return [
@@ -230,18 +159,7 @@ class ScenarioSim:
     def min_distance_m(self, below_m: float = math.inf) -> float:
         """Smallest footprint distance [m] from the ego to any actor; actors whose
         bounding circles are already further than ``below_m`` are skipped."""
-        ex, ey, _ = self.ego.world_pose()
-        ego_r = 0.5 * math.hypot(EGO_SIZE_M[0], EGO_SIZE_M[1])
-        ego = None
-        best = math.inf
-        for a in self.actors:
-            ax, ay, _ = a.vehicle.world_pose()
-            lower = math.hypot(ax - ex, ay - ey) - ego_r - 0.5 * math.hypot(a.spec.length_m, a.spec.width_m)
-            if lower >= min(best, below_m):
-                continue
-            ego = self._ego_corners() if ego is None else ego
-            best = min(best, footprint_distance(ego, self._corners(a.vehicle, a.spec)))
-        return best
+        return episode_contact.min_distance_m(self.ego, self.actors, below_m)
 
     # ------------------------------------------------------------------ camera
     def _camera_pose(self) -> np.ndarray:
@@ -296,16 +214,14 @@ class ScenarioSim:
             self.min_gap_m = min(self.min_gap_m, d)
 
     def _check_collision(self) -> None:
-        ego = self._ego_corners()
-        for a in self.actors:
-            if footprints_overlap(ego, self._corners(a.vehicle, a.spec)):
-                heading = -self.ego.heading
-                along = np.array([math.cos(heading), math.sin(heading)])
-                v_rel = float(self.ego.speed) - float(a.vehicle.world_velocity() @ along)
-                self.collision = Collision(self.t_s, a.instance, float(self.ego.speed), v_rel)
-                for v in self.road.vehicles:  # both come to rest at the contact (highway-env does too)
-                    v.speed = 0.0
-                return
+        a = episode_contact.touching_actor(self.ego, self.actors)
+        if a is not None:
+            heading = -self.ego.heading
+            along = np.array([math.cos(heading), math.sin(heading)])
+            v_rel = float(self.ego.speed) - float(a.vehicle.world_velocity() @ along)
+            self.collision = Collision(self.t_s, a.instance, float(self.ego.speed), v_rel)
+            for v in self.road.vehicles:  # both come to rest at the contact (highway-env does too)
+                v.speed = 0.0
 
     def done(self, truth: StepTruth) -> str | None:
         """Why the run ends now, or None."""
