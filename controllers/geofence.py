@@ -67,8 +67,10 @@ at stride 2 and 34/36 threats avoided against 32/36). The price: the fence reads
 its own calibration (corridor, ground rule, standing regions, persistence), each view
 with its own estimator cache; tau_hat is the smallest threshold fired in either view,
 so the most urgent stage over both views decides. ``fovea_fences_from_s`` keeps the
-fences below it on the wide view only (the fovea sees the road from about 13 m on at
-zoom 4, where the short fences are decided anyway); 0 runs every fence in both.
+fences below it on the wide view only: by default those under 1.4 s (at K = 4 the fovea
+runs the 1.84 and 2.8 s fences; the fovea sees the corridor from about 15 m on at zoom 4,
+where the short fences are decided by the wide view anyway: docs/fovea.md); 0 runs every
+fence in both.
 
 **Thresholds**: explicit (any order, each within the estimator's trained range), or
 ``default_thresholds(K)``: K values spaced uniformly in log tau over
@@ -108,6 +110,10 @@ def check_frame_stride(frame_stride) -> int:
     if not frame_stride_ok(frame_stride):
         raise ConfigError(f"frame stride {frame_stride!r}: must be an integer in [1, {MAX_FRAME_STRIDE}]")
     return frame_stride
+
+
+#: [s] with a fovea, fences below this run on the wide view only (the 1.5 s fence of K = 1 stays in both)
+DEFAULT_FOVEA_FENCES_FROM_S = 1.4
 
 
 def default_thresholds(num_alphas: int) -> tuple[float, ...]:
@@ -152,7 +158,7 @@ class GeofenceConfig:
     release_frames: int = 3  # [jobs] without any fence firing before braking is released
     min_speed_mps: float = 1.0  # [m/s] below this: no warning, no braking
     frame_stride: int = DEFAULT_FRAME_STRIDE  # [frames] the pair is (k - stride, k): 3x the motion per pair
-    fovea_fences_from_s: float = 0.0  # [s] with a fovea: fences below this run on the wide view only
+    fovea_fences_from_s: float = DEFAULT_FOVEA_FENCES_FROM_S  # [s] with a fovea: fences below run on the wide view only
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "thresholds_s", check_thresholds(self.thresholds_s))
@@ -175,16 +181,11 @@ class GeofenceConfig:
 
     def fences(self, views) -> dict[str, np.ndarray]:
         """view -> indices into the sorted thresholds evaluated on it: every fence on the
-        wide view, those from ``fovea_fences_from_s`` on on the fovea (refused when none)."""
+        wide view, those from ``fovea_fences_from_s`` on on the fovea (at least the largest)."""
         thr = np.sort(np.asarray(self.thresholds_s, dtype=np.float64))
         out = {"wide": np.arange(len(thr))}
         if "fovea" in views:
-            out["fovea"] = np.flatnonzero(thr >= self.fovea_fences_from_s - 1e-9)
-            if not out["fovea"].size:
-                raise ConfigError(
-                    f"GeofenceConfig.fovea_fences_from_s = {self.fovea_fences_from_s:g} s leaves the fovea "
-                    f"no fence (largest {thr.max():g} s)"
-                )
+            out["fovea"] = np.flatnonzero(thr >= min(self.fovea_fences_from_s, thr[-1]) - 1e-9)
         return out
 
 

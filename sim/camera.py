@@ -39,7 +39,8 @@ GL_FROM_CV = np.diag([1.0, -1.0, -1.0, 1.0])
 _CV_FROM_EGO_AXES = np.array([[0.0, -1.0, 0.0], [0.0, 0.0, -1.0], [1.0, 0.0, 0.0]])
 MAX_FOVEA_ZOOM = 16.0  # [-] a larger zoom sees under 2 deg at the default 30 deg
 #: [-] the fovea's width over the wide view's: at zoom 4 a 144 px fovea beside a 288 px wide view
-#: spans +-9.7 deg, the ego's corridor (+-1.2 m) from 7 m on, and costs half a full-width view
+#: spans +-5.7 deg, the ego's corridor (+-1.45 m with its margin) from 15 m on, and costs half a
+#: full-width view's pixels; a third (96 px) alarms falsely on a car passing at its edge (docs/fovea.md)
 DEFAULT_FOVEA_WIDTH_SHARE = 0.5
 VIEWS = ("wide", "fovea")
 

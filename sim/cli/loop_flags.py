@@ -9,6 +9,7 @@ from bittc_core.errors import CliError, ConfigError
 
 def add_controller_flags(p: argparse.ArgumentParser, default: str | None = None) -> None:
     import controllers
+    from controllers.geofence import DEFAULT_FOVEA_FENCES_FROM_S
 
     p.add_argument(
         "--controller",
@@ -53,7 +54,8 @@ def add_controller_flags(p: argparse.ArgumentParser, default: str | None = None)
         type=float,
         default=None,
         metavar="S",
-        help="geofence/flow with a fovea: fences below S seconds run on the wide view only (default 0: all in both)",
+        help="geofence/flow with a fovea: fences below S seconds run on the wide view only "
+        f"(default {DEFAULT_FOVEA_FENCES_FROM_S:g}; 0: all in both)",
     )
     from sim.cli.common import add_backend_flags
 

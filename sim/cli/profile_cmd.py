@@ -77,12 +77,12 @@ def _fit(jobs: dict, measured: dict, size_hw: tuple[int, int]) -> tuple[dict, di
 def _print_fit(doc_terms: dict, fits: dict, timings: list[dict]) -> None:
     from sim.cost_model import CostTerms, JobWork
 
-    print(f"{'estimator':<10}{'views':>6}{'thr':>5}{'extr':>5}{'median ms':>11}{'fit ms':>8}")
+    print(f"{'estimator':<10}{'views':>6}{'thr':>7}{'extr':>6}{'median ms':>11}{'fit ms':>8}")
     for r in timings:
         wk = JobWork(r["estimator"], r["views"], r["thresholds"], r["extractions"])
         fit = CostTerms(**doc_terms[r["estimator"]]).latency_ms(wk)
         print(
-            f"{r['estimator']:<10}{wk.views:>6}{wk.thresholds:>5}{wk.extractions:>5}{r['median_ms']:>11.2f}{fit:>8.2f}"
+            f"{r['estimator']:<10}{wk.views:>6}{wk.thresholds:>7.3g}{wk.extractions:>6.3g}{r['median_ms']:>11.2f}{fit:>8.2f}"
         )
     for family, t in doc_terms.items():
         terms = ", ".join(f"{k} {v:.2f}" for k, v in t.items())
