@@ -28,7 +28,7 @@ Observation Space (Dict):
                                               ego width [m]
     ============== ========================== ==========================================
     With a fovea (``camera.fovea_zoom``), also ``fovea_image`` and ``fovea_image_prev``
-    (the same captures through the magnified view, same format) and ``fovea_calibration``
+    (the same captures through the magnified view, ``fovea_width_share`` of the width) and ``fovea_calibration``
     (its 8 numbers, as ``calibration``).
     ``GeofenceObservation`` adds ``geofence`` (K, H, W) in [0, 1] and ``thresholds_s`` (K,),
     and with a fovea ``fovea_geofence`` (K, H, W).
@@ -128,7 +128,8 @@ class ScenarioEnv(gym.Env):
             "calibration": calibration,
         }
         if self.camera.fovea_zoom is not None:
-            obs |= {"fovea_image": image, "fovea_image_prev": image, "fovea_calibration": calibration}
+            fovea = spaces.Box(0, 255, (h, self.camera.fovea_width_px, 3), np.uint8)  # narrower: sim.camera
+            obs |= {"fovea_image": fovea, "fovea_image_prev": fovea, "fovea_calibration": calibration}
         self.observation_space = spaces.Dict(obs)
         self.action_space = spaces.Box(0.0, MAX_DECEL_MPS2, (1,), np.float32)
         self._sim: ScenarioSim | None = None
@@ -273,12 +274,14 @@ class GeofenceObservation(gym.Wrapper):
         base.views = len(self._views)
         base.estimator_kind = getattr(self.estimator, "name", None) or None
         base.cached_frames = int(getattr(self.estimator, "cached_frames", 0))
-        k, h, w = len(thr), base.camera.height_px, base.camera.width_px
-        maps = spaces.Box(0.0, 1.0, (k, h, w), np.float32)
+        k = len(thr)
+        width = {"geofence": base.camera.width_px, "fovea_geofence": base.camera.fovea_width_px}
         self.observation_space = spaces.Dict(
             {
                 **env.observation_space.spaces,
-                **{key: maps for key in self._views},
+                **{
+                    key: spaces.Box(0.0, 1.0, (k, base.camera.height_px, width[key]), np.float32) for key in self._views
+                },
                 "thresholds_s": spaces.Box(0.0, float(max(thr)), (k,), np.float32),
             }
         )

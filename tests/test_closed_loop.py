@@ -112,7 +112,7 @@ def test_bad_input_is_refused_by_name_and_nothing_is_written(tmp_path, capsys, e
 
 def test_a_fovea_run_is_byte_identical_and_reports_both_views(tmp_path):
     case = scenarios.resolve("CCRs-30")[0]
-    ctrl = controllers.make("geofence", thresholds_s=(1.0, 2.0))
+    ctrl = controllers.make("geofence", thresholds_s=(1.0, 2.0), fovea_fences_from_s=0.0)  # both fences in both views
     cam = CameraConfig(fovea_zoom=4.0)
     outs = []
     for i in range(2):
@@ -139,7 +139,7 @@ def test_a_profile_charges_both_views_and_every_extraction(tmp_path):
     prof = named_profiles()["this-cpu"]
     s = run_case(
         scenarios.resolve("CCRs-20")[0],
-        controllers.make("geofence", thresholds_s=(1.0, 2.0)),
+        controllers.make("geofence", thresholds_s=(1.0, 2.0)),  # the fovea runs the 2 s fence alone
         CameraConfig(fovea_zoom=2.0),
         seed=0,
         out_dir=tmp_path / "r",
@@ -149,8 +149,8 @@ def test_a_profile_charges_both_views_and_every_extraction(tmp_path):
     col = rows[0].split(",").index("latency_ms")
     lat = {float(r.split(",")[col]) for r in rows[1:] if r.split(",")[col]}
     # the fovea is half as wide: its thresholds and extractions count half (sim.cost_model.JobWork)
-    steady = prof.latency_ms(JobWork("bittc", 2, 2 + 1, 1 + 0.5))  # one new frame per view
-    first = prof.latency_ms(JobWork("bittc", 2, 2 + 1, 2 + 1))  # both frames of the first pairs, in both views
+    steady = prof.latency_ms(JobWork("bittc", 2, 2 + 0.5, 1 + 0.5))  # one new frame per view
+    first = prof.latency_ms(JobWork("bittc", 2, 2 + 0.5, 2 + 1))  # both frames of the first pairs, in both views
     assert lat == {round(steady, 2), round(first, 2)} and s["frames_skipped"] == 0
     # the flow baseline is priced by its own terms, not the network's
     flow = run_case(

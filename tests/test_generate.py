@@ -284,7 +284,7 @@ def test_fovea_scenes(tmp_path):
     motions = set()
     for d in sorted((tmp_path / "f" / "train").iterdir()):
         _, _, meta = read_sample(d)
-        cam = CameraConfig(**meta["camera"])
+        cam = CameraConfig(**{"fovea_width_share": 1.0, **meta["camera"]})  # absent: the full width
         assert meta["view"] == {"name": "fovea", "zoom": cam.fovea_zoom}
         vfov_f = 2 * math.degrees(math.atan(math.tan(math.radians(cam.vfov_deg) / 2) / cam.fovea_zoom))
         assert FOVEA_VFOV_DEG[0] - 1e-3 <= vfov_f <= FOVEA_VFOV_DEG[1] + 1e-3
