@@ -16,8 +16,12 @@ def add_parser(sub) -> argparse.ArgumentParser:
 
 
 def run(args) -> int:
+    from sim.job_timing import JobSetting
     from sim.latency import MEASURED_PROFILES_DIR, PROFILES_FILE, named_profiles
 
+    # the default camera's streaming jobs at K = 4, as the closed loop charges them: the fovea
+    # half as wide, running the controller's default fovea fences (sim.job_timing.JobSetting.work)
+    wide, fovea = JobSetting(4), JobSetting(4, fovea_zoom=4.0)
     for p in named_profiles().values():
         kind = "measured" if p.measured else "not measured"
         cont = f", continuous {p.continuous_ms:g} ms" if p.continuous_ms is not None else ""
@@ -25,8 +29,9 @@ def run(args) -> int:
         for family, c in p.costs.items():
             print(
                 f"    {family:<6} L = {c.job_ms:g} + {c.view_ms:g} x views + {c.threshold_ms:g} x thresholds "
-                f"+ {c.extract_ms:g} x extractions ms (wide, K = 4: {p.stream_ms(family, 4):.1f} ms; "
-                f"with a fovea: {p.stream_ms(family, 4, views=2):.1f} ms)"
+                f"+ {c.extract_ms:g} x extractions ms (wide, K = 4: "
+                f"{p.latency_ms(wide.work(family, family == 'bittc')):.1f} ms; "
+                f"with the default fovea: {p.latency_ms(fovea.work(family, family == 'bittc')):.1f} ms)"
             )
         print(textwrap.fill(p.source, width=96, initial_indent=" " * 4, subsequent_indent=" " * 4))
     print(
