@@ -27,6 +27,8 @@ import torch
 from bittc_core.estimator import BittcEstimator, FlowEstimator
 from bittc_core.model import BinaryTTCNet, count_parameters, get_config
 
+GRAPH_THRESHOLDS = 4  # K of the thresholds graph timed on its own (the geofence controller's default)
+
 
 @dataclass(frozen=True)
 class BenchSettings:
@@ -200,3 +202,56 @@ def run_backend_comparison(s: BenchSettings, estimators: dict) -> dict:
         + "   (least-squares slope over K, in units of one threshold)"
     )
     return out
+
+
+def time_graphs(s: BenchSettings, estimators: dict, sizes: list[tuple[int, int]]) -> dict:
+    """label -> ONNX estimator (``bittc_core.estimator.onnx``; e.g. a float32 and an int8
+    export): one run of each graph of each estimator at each size of ``sizes`` timed on its
+    own, in the same interleaved rounds; the feeds are the streaming steps' on random frames
+    (the first estimator's outputs, the thresholds graph at ``GRAPH_THRESHOLDS`` thresholds).
+    Prints the medians side by side with the ratios to the first; -> {(label, size, graph): ms}."""
+    from bittc_core.export.graphs import GRAPHS
+    from bittc_core.export.quantize import graph_inputs
+
+    rng = np.random.default_rng(s.seed)
+    first = next(iter(estimators.values()))
+    eta = np.linspace(0.75, 0.95, GRAPH_THRESHOLDS)
+    calls, feeds = {}, {}
+    for size in sizes:
+        frames = [rng.integers(0, 256, (*size, 3), dtype=np.uint8) for _ in range(4)]
+        feeds[size] = graph_inputs(first.sessions[size], list(zip(frames[:-1], frames[1:])), eta)
+        for label, est in estimators.items():
+            for g in GRAPHS:
+                calls[(label, size, g)] = est.sessions[size][g]
+    times: dict = {key: [] for key in calls}
+    keys = list(calls)
+    for j in range(s.warmup + s.calls):
+        r = j % len(keys)
+        for key in keys[r:] + keys[:r]:
+            _, size, g = key
+            feed = feeds[size][g][j % len(feeds[size][g])]
+            t0 = time.perf_counter()
+            calls[key].run(None, feed)
+            if j >= s.warmup:
+                times[key].append(time.perf_counter() - t0)
+    ms = {key: float(np.median(t) * 1e3) for key, t in times.items()}
+    labels = list(estimators)
+    print(
+        f"each graph on its own, {s.threads} threads, {s.calls} interleaved rounds "
+        f"(thresholds at K = {GRAPH_THRESHOLDS}); ratios to {labels[0]}"
+    )
+    width = max(14, *(len(label) + 5 for label in labels))
+    print(
+        f"{'size':<9}{'graph':<12}"
+        + "".join(f"{label + ' ms':>{width}}" for label in labels)
+        + "".join(f"{label + ' / first':>{width + 4}}" for label in labels[1:])
+    )
+    for size in sizes:
+        for g in GRAPHS:
+            vals = [ms[(label, size, g)] for label in labels]
+            print(
+                f"{f'{size[0]}x{size[1]}':<9}{g:<12}"
+                + "".join(f"{v:>{width}.2f}" for v in vals)
+                + "".join(f"{v / vals[0]:>{width + 4}.3f}" for v in vals[1:])
+            )
+    return ms

@@ -214,6 +214,67 @@ def test_agreement_counts_pixels_and_log_eta():
     assert r["log_eta_within_0.001"] == 0.0 and abs(r["log_eta_abs_diff_max"] - 2e-3) < 1e-6
 
 
+def test_int8_export_keeps_the_fence_decisions_on_held_out_scenes(tmp_path):
+    """The shipped weights quantized at the fovea's size, calibrated on two scenes: on two
+    other scenes at most 1 % of the pixels change their fence decision against float32, at
+    every default fence of the geofence controller (mapped to the pairs' interval)."""
+    import scenarios
+    from bittc_core.export.quantize import PARITY_TARGET, FramePairs, Int8Settings
+    from controllers.geofence import DEFAULT_FRAME_STRIDE, default_thresholds, estimator_thresholds
+    from sim.camera import CameraConfig
+    from sim.frame_pairs import render_pairs
+
+    camera = CameraConfig(fovea_zoom=4)
+    fovea = camera.fovea()
+
+    def pairs(*names):
+        cases = [scenarios.resolve_suite(n)[0] for n in names]
+        return FramePairs(
+            tuple(p for c in cases for p in render_pairs(c, camera, 0, 4, DEFAULT_FRAME_STRIDE)["fovea"]), ""
+        )
+
+    ref = make_estimator("bittc", device="cpu")
+    thr = estimator_thresholds(ref, default_thresholds(4), camera.dt_s, DEFAULT_FRAME_STRIDE)
+    settings = Int8Settings(pairs("CCRs-50", "cut-in"), pairs("CCRs-30", "near-merge-45-15m"), tuple(thr))
+    m = export_onnx(DEFAULT_WEIGHTS, tmp_path / "int8", sizes=[(fovea.height_px, fovea.width_px)], int8=settings)
+    key = f"{fovea.height_px}x{fovea.width_px}"
+    assert m["precision"] == "int8" and m["quantization"]["parity"]["pairs"] == {key: 8}
+    assert m["sizes"][0]["graphs"]["thresholds"]["precision"] == "int8"
+    changed = m["quantization"]["parity"]["decision_changed"][key]
+    assert len(changed) == 4 and max(changed.values()) <= PARITY_TARGET == 0.01, changed
+    assert not [p.name for p in (tmp_path / "int8").iterdir() if not p.name.endswith((".onnx", ".json"))]
+    est = make_estimator("bittc", weights=str(DEFAULT_WEIGHTS), backend="onnxruntime", onnx=str(tmp_path / "int8"))
+    assert est.precision == "int8" and est.sizes_px == ((fovea.height_px, fovea.width_px),)
+
+
+def test_bench_times_several_export_folders_side_by_side(tiny_export, tmp_path, capsys):
+    import shutil
+
+    ckpt, folder = tiny_export
+    copy = tmp_path / "copy"
+    shutil.copytree(folder, copy)
+    common = ["bench", "--backend", "onnxruntime", "--weights", str(ckpt), "--size", "24x48", "--calls", "1"]
+    assert main([*common, "--onnx", str(folder), str(copy), "--graphs", "--threads", "1"]) == 0
+    out = capsys.readouterr().out
+    assert "onnxruntime-float32-copy ms" in out and "24x24    thresholds" in out
+    assert main([*common, "--onnx", str(folder), str(copy), "--fovea", "off", "--threads", "1"]) == 0
+    assert "onnxruntime-float32-onnx" in capsys.readouterr().out
+    assert main([*common, "--onnx", str(folder), str(folder)]) == 2
+    assert "given twice" in capsys.readouterr().err
+    assert main([*common, "--graphs"]) == 2
+
+
+def test_int8_settings_need_pairs_of_every_size(tiny_export, tmp_path):
+    from bittc_core.export.quantize import FramePairs, Int8Settings
+
+    ckpt, _ = tiny_export
+    a, b = _zoom_pair(*SIZE, 0)
+    only_one = FramePairs(((a, b),), "")
+    with pytest.raises(ExportError, match="none of 24x24 px"):
+        export_onnx(ckpt, tmp_path / "out", sizes=[SIZE, HALF], int8=Int8Settings(only_one, only_one, (1.0,)))
+    assert not (tmp_path / "out").exists()
+
+
 @pytest.mark.slow
 def test_shipped_weights_agree_on_zoom_pairs(tmp_path):
     """The shipped network: >= 99.9 % of geofence pixels and log eta within 1e-3 on

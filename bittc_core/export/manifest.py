@@ -13,14 +13,18 @@ sizes, one file ``<graph>_<H>x<W>.onnx`` per graph and size, and ``manifest.json
     sizes           [{"height_px", "width_px", "graphs": graph -> {"file", "sha256",
                      "inputs": [{name, shape, dtype}], "outputs": [...]}}], one per image
                      size (the padded grid of the warps is fixed per size); a shape lists
-                     ints and the names of dynamic axes ("views" V, "thresholds" K)
+                     ints and the names of dynamic axes ("views" V, "thresholds" K); in
+                     an int8 export each graph also has its "precision" (graphs left in
+                     float32 are copied as they are)
     frame_dt_s      [s] the frame interval the network was trained at
     eta_range       [eta(tau_min_s), eta(tau_max_s)]: the trained geofence range, with
                      tau_range_s; continuous: cont_eta_min, cont_eta_max, cont_levels
     opset           the ONNX opset
     quantization    null for float32; for int8 (``bittc_core.export.quantize``): the
-                     method, the calibration frames, the nodes left in float and the
-                     parity against the float graphs on held-out frames
+                     method, the graphs and op types quantized, the nodes left in float,
+                     the calibration frames and thresholds, and the parity against the
+                     float32 graphs on held-out frames (the share of pixels whose fence
+                     decision changed, per size and threshold, and the target)
     exporter        {"torch": version, "onnx": version, "created": ISO date}
 
 Reading it checks the format, that every graph file of every size is there with its hash

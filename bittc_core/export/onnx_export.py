@@ -5,7 +5,9 @@ dynamic axes V and K) once per image size asked for (the warps' padded grid is f
 size), is checked with ``onnx.checker`` and listed with its hash under its size in the
 manifest (``bittc_core.export.manifest``). The folder is written whole or not at all: into
 a temporary folder beside it, renamed at the end; an existing export folder is replaced,
-any other non-empty folder refused.
+any other non-empty folder refused. With ``int8`` settings the float32 graphs are made in
+a scratch folder inside it and quantized from there (``bittc_core.export.quantize``); the
+folder holds the int8 export alone.
 """
 
 from __future__ import annotations
@@ -121,15 +123,22 @@ def export_onnx(
     sizes=None,
     height_px: int | None = None,
     width_px: int | None = None,
+    int8=None,
 ) -> dict:
     """Export ``weights`` into the folder ``out`` at every image size of ``sizes`` ((H, W)
     [px] pairs; or the one size ``height_px`` x ``width_px``, default ``DEFAULT_SIZE_PX``);
-    -> the manifest. Steps: check the folder, export and check each graph into a private
-    temporary folder, write the manifest, swap the folder in whole."""
+    ``int8``: ``quantize.Int8Settings``, an int8 export calibrated and checked on its frame
+    pairs; -> the manifest. Steps: check the folder, export and check each graph into a
+    private temporary folder (and quantize them), write the manifest, swap the folder in
+    whole."""
     require_onnx()
     from bittc_core.checkpoint import build_network, load_checkpoint
 
     sizes = check_sizes(sizes, height_px, width_px)
+    if int8 is not None:
+        from bittc_core.export.quantize import check_settings
+
+        check_settings(int8, sizes)
     out = Path(out)
     if out.exists() and (not out.is_dir() or (any(out.iterdir()) and not (out / MANIFEST).is_file())):
         raise ExportError(f"{str(out)!r}: exists and is not an ONNX export folder; choose another folder")
@@ -144,8 +153,15 @@ def export_onnx(
     os.umask(umask)
     os.chmod(tmp, 0o777 & ~umask)  # mkdtemp makes it private; the export is an ordinary folder
     try:
-        manifest = _manifest(ckpt, weights, [export_size(net, h, w, tmp) for h, w in sizes])
-        (tmp / MANIFEST).write_text(json.dumps(manifest, indent=2) + "\n")
+        graphs = tmp / ".float32" if int8 is not None else tmp
+        graphs.mkdir(exist_ok=True)
+        manifest = _manifest(ckpt, weights, [export_size(net, h, w, graphs) for h, w in sizes])
+        (graphs / MANIFEST).write_text(json.dumps(manifest, indent=2) + "\n")
+        if int8 is not None:
+            from bittc_core.export.quantize import quantize_export
+
+            manifest = quantize_export(graphs, tmp, int8)
+            shutil.rmtree(graphs)
         _swap_in(tmp, out)
         return manifest
     except BaseException:

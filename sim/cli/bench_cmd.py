@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 
 from bittc_core.errors import BittcError, CliError
-from sim.cli.common import check_frame_size, parse_fovea, parse_size
+from sim.cli.common import DEFAULT_FOVEA, check_frame_size, parse_fovea, parse_size
 
 DEFAULT_CONFIG = "cpu-small-corr"
 
@@ -21,7 +21,9 @@ def add_parser(sub) -> argparse.ArgumentParser:
         "With --backend torch onnxruntime: both backends timed in the same interleaved rounds, "
         "side by side with their ratios. With --fovea off 4: whole closed-loop jobs instead (the network on "
         "every view plus the geofence controller's own work), per backend x fovea x K, binary and "
-        "continuous, in the same interleaved rounds; --out FILE writes them as JSON rows.",
+        "continuous, in the same interleaved rounds; --out FILE writes them as JSON rows. Several "
+        "--onnx folders (e.g. a float32 and an int8 export) are timed side by side as backends "
+        "onnxruntime-<precision>; --graphs times each ONNX graph on its own, per folder.",
     )
     p.add_argument(
         "--config",
@@ -37,7 +39,20 @@ def add_parser(sub) -> argparse.ArgumentParser:
         help="backends to time (default torch); onnxruntime times the shipped weights (or --weights) "
         "exported to --onnx DIR, or to a temporary folder without it",
     )
-    p.add_argument("--onnx", default=None, metavar="DIR", help="with --backend onnxruntime: `bittc export --onnx DIR`")
+    p.add_argument(
+        "--onnx",
+        nargs="+",
+        default=None,
+        metavar="DIR",
+        help="with --backend onnxruntime: folders made by `bittc export --onnx DIR [--int8]`, each timed "
+        "as its own backend",
+    )
+    p.add_argument(
+        "--graphs",
+        action="store_true",
+        help="with --backend onnxruntime: time each graph of each --onnx folder on its own (extractor, "
+        "reference, thresholds at K = 4, continuous), wide view and fovea, in interleaved rounds",
+    )
     p.add_argument("--calls", type=int, default=30, help="timed calls per setting (default 30)")
     p.add_argument("--threads", type=int, default=2, help="torch / onnxruntime threads (default 2)")
     p.add_argument(
@@ -71,6 +86,10 @@ def check_common(args):
     backends = list(dict.fromkeys(args.backend))
     if args.onnx is not None and "onnxruntime" not in backends:
         raise CliError("--onnx applies to --backend onnxruntime")
+    if args.onnx is not None and len(set(args.onnx)) != len(args.onnx):
+        raise CliError(f"--onnx {' '.join(args.onnx)}: a folder given twice")
+    if args.graphs and (args.onnx is None or args.fovea is not None):
+        raise CliError("--graphs times the graphs of --backend onnxruntime --onnx DIR [DIR ...], without --fovea")
     if "onnxruntime" in backends:
         if args.config is not None:
             raise CliError(
@@ -99,8 +118,10 @@ def view_sizes(size_hw: tuple[int, int], foveas=(None,)) -> list[tuple[int, int]
 
 
 def estimators_for(backends, weights, onnx, sizes, threads, tmp_dir):
-    """backend -> estimator of the same weights; onnxruntime exports them at every size of
-    ``sizes`` into ``tmp_dir`` when no ``onnx`` folder is given."""
+    """backend label -> estimator of the same weights; onnxruntime exports them at every size
+    of ``sizes`` into ``tmp_dir`` when no ``onnx`` folders are given. Several folders are
+    labelled by their precision: onnxruntime-float32, onnxruntime-int8 (and the folder's
+    name where two share one)."""
     import time
 
     import torch
@@ -119,10 +140,18 @@ def estimators_for(backends, weights, onnx, sizes, threads, tmp_dir):
             from bittc_core.export.onnx_export import export_onnx
 
             t0 = time.perf_counter()
-            onnx = f"{tmp_dir}/onnx"
-            export_onnx(weights, onnx, sizes=sizes)
+            onnx = [f"{tmp_dir}/onnx"]
+            export_onnx(weights, onnx[0], sizes=sizes)
             print(f"exported {weights} to a temporary ONNX folder in {time.perf_counter() - t0:.0f} s")
-        out[b] = make_estimator("bittc", weights=weights, backend="onnxruntime", onnx=onnx)
+        ests = [make_estimator("bittc", weights=weights, backend="onnxruntime", onnx=d) for d in onnx]
+        precisions = [e.precision for e in ests]
+        for d, e in zip(onnx, ests):
+            label = b
+            if len(ests) > 1:
+                label = f"{b}-{e.precision}"
+                if precisions.count(e.precision) > 1:
+                    label += f"-{Path(d).name}"
+            out[label] = e
     return out
 
 
@@ -158,13 +187,15 @@ def run_jobs(args, settings, backends, ests) -> int:
         f"{settings.calls} interleaved rounds (the estimator on every view + the geofence controller)"
     )
     base = foveas[0]
-    print(f"{'backend':<12}{'fovea':>7}{'K':>6}{'median ms':>11}{'/ ' + ('off' if base is None else f'x{base:g}'):>9}")
+    width = max(12, *(len(b) + 2 for b in ests))
+    per = "/ " + ("off" if base is None else f"x{base:g}")
+    print(f"{'backend':<{width}}{'fovea':>7}{'K':>6}{'median ms':>11}{per:>9}")
     ref = {(r["backend"], r["output"], r["num_alphas"]): r["median_ms"] for r in rows if r["fovea_zoom"] == base}
     for r in rows:
         k = "cont" if r["output"] == "continuous" else str(r["num_alphas"])
         ratio = r["median_ms"] / ref[(r["backend"], r["output"], r["num_alphas"])]
         zoom = "off" if r["fovea_zoom"] is None else f"x{r['fovea_zoom']:g}"
-        print(f"{r['backend']:<12}{zoom:>7}{k:>6}{r['median_ms']:>11.2f}{ratio:>9.2f}")
+        print(f"{r['backend']:<{width}}{zoom:>7}{k:>6}{r['median_ms']:>11.2f}{ratio:>9.2f}")
     if args.out:
         write_text_atomic(Path(args.out), json.dumps({"rows": rows}, indent=2) + "\n")
         print(f"wrote {args.out}")
@@ -193,6 +224,13 @@ def run(args) -> int:
         with tempfile.TemporaryDirectory(prefix="bittc_bench_") as tmp:
             ests = estimators_for(backends, args.weights, args.onnx, sizes, settings.threads, tmp)
             return run_jobs(args, settings, backends, ests)
+    if args.graphs:
+        from bittc_core.benchmark import time_graphs
+
+        sizes = view_sizes((settings.height_px, settings.width_px), [parse_fovea(DEFAULT_FOVEA)])
+        ests = estimators_for(["onnxruntime"], args.weights, args.onnx, sizes, settings.threads, None)
+        time_graphs(settings, ests, sizes)
+        return 0
     if backends == ["torch"]:
         run_benchmark(settings, weights=args.weights)
         return 0
