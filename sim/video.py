@@ -30,6 +30,25 @@ def ttc_overlay(
     return out.astype(np.uint8)
 
 
+def threshold_overlay(
+    image_rgb: np.ndarray, geofence: np.ndarray, thresholds_s: np.ndarray, alpha: float = 0.5
+) -> np.ndarray:
+    """Tint each geofence's inside (p > 0.5) from red (shortest tau) to yellow (longest);
+    a pixel inside several takes the shortest one's colour (blended once, at ``alpha``)."""
+    order = np.argsort(thresholds_s)[::-1]  # longest first, so shorter ones paint over
+    k = len(order)
+    color = np.zeros(image_rgb.shape, np.float32)
+    tinted = np.zeros(image_rgb.shape[:2], bool)
+    for rank, i in enumerate(order):
+        t = 1.0 - rank / max(k - 1, 1)  # 1 for the longest, 0 for the shortest
+        inside = geofence[i] > 0.5
+        color[inside] = (255.0, 220.0 * t, 0.0)
+        tinted |= inside
+    out = image_rgb.astype(np.float32)
+    out[tinted] = (1 - alpha) * out[tinted] + alpha * color[tinted]
+    return out.round().astype(np.uint8)
+
+
 def fence_colours(k: int) -> np.ndarray:
     """(K, 3) RGB, the smallest threshold red through yellow to the largest in cyan."""
     t = np.linspace(0.0, 1.0, k) if k > 1 else np.zeros(1)

@@ -1,4 +1,6 @@
-"""`bittc predict PREV LATEST --out DIR`: geofences and TTC of one pair of image files.
+"""`bittc predict PREV LATEST --out DIR`: geofences and TTC of one pair of image files
+(`bittc predict CLIP --out DIR`: of every frame of a video or a folder of frames, see
+``sim.cli.predict_clip``).
 
 PREV and LATEST are two camera frames (PNG, JPEG, ... read by OpenCV) taken
 ``frame_dt_s`` apart (0.1 s for the shipped weights: the network reads eta = Z(t1)/Z(t0)
@@ -39,6 +41,7 @@ from pathlib import Path
 import numpy as np
 
 from bittc_core.errors import CliError
+from sim.cli.clip_flags import add_clip_flags, check_pair_mode, fovea_box
 from sim.cli.common import (
     TTA_MODES,
     add_backend_flags,
@@ -49,29 +52,34 @@ from sim.cli.common import (
     parse_size,
     writable_dir,
 )
+from sim.cli.predict_clip import run_clip
+from sim.video import threshold_overlay as geofence_overlay
 
+DEFAULT_TAU_S = (0.5, 1.0, 2.0)  # [s] a pair's default fences
 METHODS = ("bittc", "flow")  # the oracle needs ground truth, which image files lack
-DEFAULT_TAU_S = (0.5, 1.0, 2.0)
 OUTPUT_FILES = ("prediction.npz", "geofence.png", "ttc.png", "prediction.json")
 
 
 def add_parser(sub) -> argparse.ArgumentParser:
     p = sub.add_parser(
         "predict",
-        help="geofences and TTC of one pair of image files",
+        help="geofences and TTC of one pair of image files, or of every frame of a clip",
         description=__doc__.split("\n\n", 1)[1],
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    p.add_argument("prev", metavar="PREV", help="the earlier frame (image file)")
-    p.add_argument("latest", metavar="LATEST", help="the latest frame (image file), frame_dt_s after PREV")
+    p.add_argument("prev", metavar="PREV|CLIP", help="the earlier frame (image file), or a clip (video or folder)")
+    p.add_argument(
+        "latest", metavar="LATEST", nargs="?", default=None, help="the latest frame (image file), frame_dt_s after PREV"
+    )
     p.add_argument("--out", required=True, metavar="DIR", help="output folder")
     p.add_argument(
         "--tau",
         type=float,
         nargs="+",
-        default=list(DEFAULT_TAU_S),
+        default=None,
         metavar="S",
-        help="geofence thresholds [s] from the latest frame (default 0.5 1 2)",
+        help="geofence thresholds [s] from the latest frame (default 0.5 1 2; a clip: the geofence controller's "
+        "4 default fences, 0.8 to 2.8 s, which stride 3 reaches)",
     )
     p.add_argument(
         "--method", default="bittc", choices=METHODS, help="bittc (the network, default) or flow (the DIS baseline)"
@@ -105,6 +113,7 @@ def add_parser(sub) -> argparse.ArgumentParser:
         help="the fovea's centre [native px, column row] (default: the image centre)",
     )
     add_device_flag(p)
+    add_clip_flags(p)
     return p
 
 
@@ -118,49 +127,6 @@ def read_rgb(path: str, flag: str) -> np.ndarray:
     if img is None:
         raise CliError(f"{flag} {path!r}: not an image OpenCV can read")
     return cv2.cvtColor(img, cv2.COLOR_BGR2RGB)
-
-
-def geofence_overlay(
-    image_rgb: np.ndarray, geofence: np.ndarray, thresholds_s: np.ndarray, alpha: float = 0.5
-) -> np.ndarray:
-    """Tint each geofence's inside (p > 0.5) from red (shortest tau) to yellow (longest);
-    a pixel inside several takes the shortest one's colour (blended once, at ``alpha``)."""
-    order = np.argsort(thresholds_s)[::-1]  # longest first, so shorter ones paint over
-    k = len(order)
-    color = np.zeros(image_rgb.shape, np.float32)
-    tinted = np.zeros(image_rgb.shape[:2], bool)
-    for rank, i in enumerate(order):
-        t = 1.0 - rank / max(k - 1, 1)  # 1 for the longest, 0 for the shortest
-        inside = geofence[i] > 0.5
-        color[inside] = (255.0, 220.0 * t, 0.0)
-        tinted |= inside
-    out = image_rgb.astype(np.float32)
-    out[tinted] = (1 - alpha) * out[tinted] + alpha * color[tinted]
-    return out.round().astype(np.uint8)
-
-
-def fovea_box(shape_hw, zoom: float, size_hw, center_uv=None) -> tuple[int, int, int, int]:
-    """(u0, v0, u1, v1) [native px, u1 and v1 exclusive] of the fovea's crop of a frame of
-    ``shape_hw``: (H / zoom) x (W / zoom) pixels centred on ``center_uv`` (default the image
-    centre), shifted to lie inside the frame. Refused (CliError) where the crop would hold fewer
-    native pixels than ``size_hw`` or the centre lies outside the frame."""
-    H, W = shape_hw
-    h, w = size_hw
-    ch, cw = H / zoom, W / zoom
-    if ch < h or cw < w:
-        raise CliError(
-            f"--fovea {zoom:g}: a {H}x{W} px frame gives a {ch:.0f}x{cw:.0f} px crop, fewer native pixels than "
-            f"the network's {h}x{w} (needs frames of at least {zoom * h:.0f}x{zoom * w:.0f} px, or a smaller zoom)"
-        )
-    u, v = center_uv if center_uv is not None else ((W - 1) / 2, (H - 1) / 2)
-    if not (0 <= u <= W - 1 and 0 <= v <= H - 1):
-        raise CliError(
-            f"--fovea-center {u:g} {v:g}: outside the {W}x{H} px frame (U in [0, {W - 1}], V in [0, {H - 1}])"
-        )
-    cw_i, ch_i = int(round(cw)), int(round(ch))
-    u0 = min(max(int(round(u + 0.5 - cw_i / 2)), 0), W - cw_i)
-    v0 = min(max(int(round(v + 0.5 - ch_i / 2)), 0), H - ch_i)
-    return u0, v0, u0 + cw_i, v0 + ch_i
 
 
 def _check_flags(args) -> tuple[tuple[int, int] | None, float | None]:
@@ -267,10 +233,13 @@ def run(args) -> int:
     from bittc_core.estimator.base import as_thresholds
 
     size, zoom = _check_flags(args)
+    if args.latest is None:
+        return run_clip(args, size, zoom)
+    check_pair_mode(args)
     views, box = _read_views(args, size, zoom)
     kw = {"weights": args.weights} | backend_kwargs(args, args.method)
     est = make_estimator(args.method, device=args.device, **kw, **({"tta": args.tta} if args.method == "bittc" else {}))
-    thr = as_thresholds(args.tau, est.tau_range_s, sorted_=False)
+    thr = as_thresholds(args.tau or DEFAULT_TAU_S, est.tau_range_s, sorted_=False)
     if len(np.unique(thr)) != len(thr):
         raise CliError(f"--tau {' '.join(f'{t:g}' for t in thr)}: a threshold is given twice")
     out_dir = writable_dir(args.out)  # every check above runs before anything is written
