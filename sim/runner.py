@@ -40,6 +40,7 @@ def run_case(
     actuator: ActuatorConfig | None = None,
     textures: TextureStyle = TextureStyle(),
     latency: LatencyMode | None = None,
+    export_kitti: Path | None = None,
 ) -> dict:
     """Run ``case`` closed loop; returns the summary. With ``out_dir`` writes
     summary.json, trace.csv, config.yaml, timing.json (and camera.mp4 with ``video``).
@@ -47,17 +48,20 @@ def run_case(
     ``latency`` defaults to ``measured`` for controllers that need the camera and
     ``fixed:0`` for the others. With a fixed or profile latency, summary.json,
     trace.csv and config.yaml are the same bytes for the same seed; wall-clock figures
-    go to timing.json."""
+    go to timing.json. ``export_kitti``: also write the run's frames in the KITTI raw layout
+    into that folder (``sim.kitti_export``)."""
     wall0 = time.perf_counter()
     latency = latency or default_latency(controller)
-    render = controller.needs_camera or video
+    render = controller.needs_camera or video or export_kitti is not None
     sim = ScenarioSim(case, camera, seed, render=render, actuator=actuator, textures=textures)
     writer = VideoWriter(out_dir / "camera.mp4", camera.fps_hz) if (video and out_dir is not None) else None
     lag = lag_meter_for(controller)
-    hook = None
-    if writer is not None:
-        scale = writer.scale_for(camera.width_px)
-        hook = lambda rec, frame: writer.write(video_frame(frame, rec, loop, scale))  # noqa: E731
+    exporter = None
+    if export_kitti is not None:
+        from sim.kitti_export import KittiExporter
+
+        exporter = KittiExporter(sim, export_kitti)
+    hook = _capture_hook(writer, exporter, camera, lambda: loop)
     loop = ClosedLoop(
         sim,
         latency,
@@ -91,13 +95,28 @@ def run_case(
             )
             if writer is not None:
                 writer.close()
+        if exporter is not None:
+            exporter.finish()
         return summary
     except BaseException:
         if writer is not None:
             writer.abort()
+        if exporter is not None:
+            exporter.abort()
         raise
     finally:
         sim.close()
+
+
+def _capture_hook(writer, exporter, camera: CameraConfig, loop_of):
+    """The loop's capture hook: the video frame (``writer``) and the KITTI export, or None."""
+    hooks = []
+    if writer is not None:
+        scale = writer.scale_for(camera.width_px)
+        hooks.append(lambda rec, frame: writer.write(video_frame(frame, rec, loop_of(), scale)))
+    if exporter is not None:
+        hooks.append(exporter)
+    return (lambda rec, frame: [h(rec, frame) for h in hooks]) if hooks else None
 
 
 def lag_meter_for(controller: Controller) -> FenceLagMeter | None:

@@ -200,6 +200,8 @@ def test_eval_of_the_oracle_is_perfect_and_writes_json(tmp_path):
         device="cpu",
         tta="none",
         scenarios=None,
+        kitti_raw=None,
+        strides=None,
         backend="torch",
         onnx=None,
     )

@@ -50,12 +50,26 @@ def add_parser(sub) -> argparse.ArgumentParser:
         help="instead of --data: a suite (ncap, near, benign, all, demo), a bundled name or a YAML file",
     )
     p.add_argument(
+        "--kitti-raw",
+        default=None,
+        metavar="DIR",
+        help="instead of --data: a KITTI raw drive (or `bittc run --export-kitti DIR`), its lead's TTC from the lidar",
+    )
+    p.add_argument(
+        "--strides",
+        type=int,
+        nargs="+",
+        default=None,
+        metavar="K",
+        help="with --kitti-raw: pair frames K apart, each read as the network's frame interval (default 1 to 16)",
+    )
+    p.add_argument(
         "--tau",
         type=float,
         nargs="+",
         default=[0.9, 1.6, 2.4],
         metavar="S",
-        help="with --scenarios: the fences' thresholds [s] (default 0.9 1.6 2.4)",
+        help="with --scenarios or --kitti-raw: the fences' thresholds [s] (default 0.9 1.6 2.4)",
     )
     p.add_argument("--plot", default=None, help="with --scenarios: also write this PNG of the inside-share curve")
     add_fovea_flag(p)
@@ -97,8 +111,13 @@ def add_parser(sub) -> argparse.ArgumentParser:
 
 
 def _check(args) -> Path:
-    if (args.data is None) == (args.scenarios is None):
-        raise CliError("give --data DIR (a dataset split) or --scenarios SUITE (scenario cases), one of them")
+    if sum(x is not None for x in (args.data, args.scenarios, args.kitti_raw)) != 1:
+        raise CliError(
+            "give --data DIR (a dataset split), --scenarios SUITE (scenario cases) or --kitti-raw DIR (a drive), "
+            "one of them"
+        )
+    if args.strides is not None and args.kitti_raw is None:
+        raise CliError("--strides applies to --kitti-raw")
     if args.method not in METHODS:
         raise CliError(f"--method {args.method!r}: expected one of {METHODS}")
     if args.split not in SPLITS:
@@ -113,6 +132,10 @@ def _check(args) -> Path:
         raise CliError(f"--tta {args.tta!r} applies to --method bittc only, not {args.method!r}")
     check_device(args.device)
     args.backend_kw = {"weights": args.weights} | backend_kwargs(args, args.method)
+    if args.kitti_raw is not None:
+        from sim.cli.eval_kitti import check_kitti
+
+        check_kitti(args)
     if args.scenarios is not None:
         if args.method not in ("bittc", "flow"):
             raise CliError(
@@ -140,6 +163,8 @@ def _check(args) -> Path:
     default = (
         f"eval_{args.method}_scenarios_{Path(args.scenarios).stem}.json"
         if args.scenarios
+        else f"eval_{args.method}_kitti_{Path(args.kitti_raw).name}.json"
+        if args.kitti_raw
         else f"eval_{args.method}_{args.split}.json"
     )
     out = Path(args.out or default)
@@ -295,6 +320,10 @@ def run(args) -> int:
     out = _check(args)
     if args.scenarios is not None:
         return run_scenarios(args, out)
+    if args.kitti_raw is not None:
+        from sim.cli.eval_kitti import run_kitti
+
+        return run_kitti(args, out)
     from bittc_core.estimator import make_estimator
     from bittc_core.train.data import open_split
 

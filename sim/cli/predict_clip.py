@@ -44,7 +44,7 @@ import numpy as np
 
 from bittc_core.errors import CliError
 from sim.cli.clip_flags import check, intrinsics, views_of
-from sim.clip_views import crop_view, inside_shares, roi_in_view, side_by_side
+from sim.footage_views import crop_view, inside_shares, roi_in_view, side_by_side
 
 
 def _controller(args, est, thr, views, cams, stride, rate_ratio):

@@ -34,6 +34,14 @@ def add_parser(sub) -> argparse.ArgumentParser:
     p.add_argument("--out", required=True, help="output directory")
     add_seed_flag(p, "scenery/appearance/traffic seed")
     p.add_argument("--video", action="store_true", help="also write camera.mp4 with the exact TTC overlay and a HUD")
+    p.add_argument(
+        "--export-kitti",
+        default=None,
+        metavar="DIR",
+        help="also write the run in the KITTI raw layout into DIR (new or empty): 375x1242 image_02 (the wide "
+        "view's horizontal field of view), a 64-beam velodyne scan ray-cast from the exact depth, calib, "
+        "timestamps, oxts and bittc_truth.csv (one case only)",
+    )
     add_camera_flags(p)
     return p
 
@@ -107,9 +115,11 @@ def run(args) -> int:
     textures = textures_from_args(args)
     cases = scenarios.resolve(args.scenario)
     controller, latency = controller_from_args(args, camera)
+    export = _export_dir(args.export_kitti, cases)
     out = writable_dir(args.out)
     if len(cases) == 1:
-        s = run_case(cases[0], controller, camera, args.seed, out, video=args.video, textures=textures, latency=latency)
+        kw = {"textures": textures, "latency": latency, "export_kitti": export}
+        s = run_case(cases[0], controller, camera, args.seed, out, video=args.video, **kw)
         print(json.dumps(s, indent=2))
     else:
         summaries = run_cases(
@@ -118,3 +128,14 @@ def run(args) -> int:
         print(format_table(summaries))
     print(f"wrote {Path(out)}")
     return 0
+
+
+def _export_dir(path: str | None, cases) -> Path | None:
+    if path is None:
+        return None
+    if len(cases) != 1:
+        raise CliError(f"--export-kitti {path!r}: exports one case; {len(cases)} were given")
+    p = Path(path)
+    if p.exists() and (not p.is_dir() or any(p.iterdir())):
+        raise CliError(f"--export-kitti {path!r}: exists and is not an empty folder")
+    return p
