@@ -52,6 +52,9 @@ class ScenarioSim:
         render: render camera frames and per-pixel ground truth.
         actuator: the ego's brake actuator.
         textures: the rendered world's ground and vehicle texture styles.
+        sensor: ``sim.sensor.SensorEffects`` the rendered images go through (the
+            controller's view of them), with the exact motion since the previous capture;
+            None: clean renders. Depth, instances and every truth stay the renderer's.
     """
 
     def __init__(
@@ -62,8 +65,15 @@ class ScenarioSim:
         render: bool,
         actuator: ActuatorConfig | None = None,
         textures: TextureStyle = TextureStyle(),
+        sensor=None,
     ):
         self.case = case
+        self.sensor = sensor
+        if sensor is not None:
+            from sim.sensor import REALISM_STREAM
+
+            self._sensor_rng = np.random.default_rng([seed, REALISM_STREAM])
+        self._last_capture: Frame | None = None
         self.camera = camera
         self.textures = textures
         self.seed = seed
@@ -176,7 +186,39 @@ class ScenarioSim:
         r = self.world.render(cam_T_world)
         fovea = self.camera.fovea()
         f = self.world.render(cam_T_world, pinhole=fovea) if fovea is not None else None
-        return Frame(self.t_s, r.rgb, cam_T_world, poses, r.depth_m, r.instance, f)
+        frame = Frame(self.t_s, r.rgb, cam_T_world, poses, r.depth_m, r.instance, f)
+        if self.sensor is not None:
+            frame = self._through_sensor(frame)
+        return frame
+
+    def _through_sensor(self, frame: Frame) -> Frame:
+        """Each view's image through ``self.sensor``, moved by the exact motion since the
+        previous capture (for the first, since ``_before`` it)."""
+        from sim.sensor import apply_effects
+
+        prev, self._last_capture = self._last_capture, frame
+        if prev is None:
+            prev = self._before(frame)
+        out = {}
+        for view in ("wide", "fovea") if frame.fovea is not None else ("wide",):
+            flow = self.ground_truth(prev, frame, view).flow_px
+            out[view] = apply_effects(frame.view(view)[0], self.sensor, flow, frame.t_s - prev.t_s, self._sensor_rng)
+        fovea = replace(frame.fovea, rgb=out["fovea"]) if frame.fovea is not None else None
+        return replace(frame, image=out["wide"], fovea=fovea)
+
+    def _before(self, frame: Frame) -> Frame:
+        """The state one frame interval before ``frame`` (no image): the ego and every actor
+        moved back at their present velocities, so the first capture has a motion too."""
+        dt = self.camera.dt_s
+        vx, vy = self.ego.world_velocity()
+        shift = np.eye(4)
+        shift[:3, 3] = (vx * dt, vy * dt, 0.0)  # world_T_cam moved back by v dt
+        poses = {}
+        for a in self.actors:
+            x, y, h = frame.poses[a.instance]
+            ax, ay = a.vehicle.world_velocity()
+            poses[a.instance] = (x - ax * dt, y - ay * dt, h)
+        return Frame(frame.t_s - dt, None, frame.cam_T_world @ shift, poses)
 
     def ground_truth(self, prev: Frame, latest: Frame, view: str = "wide") -> GroundTruth:
         """Exact per-pixel ground truth of ``latest`` against ``prev`` in view 'wide' or 'fovea'."""

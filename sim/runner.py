@@ -41,6 +41,7 @@ def run_case(
     textures: TextureStyle = TextureStyle(),
     latency: LatencyMode | None = None,
     export_kitti: Path | None = None,
+    sensor=None,
 ) -> dict:
     """Run ``case`` closed loop; returns the summary. With ``out_dir`` writes
     summary.json, trace.csv, config.yaml, timing.json (and camera.mp4 with ``video``).
@@ -49,11 +50,12 @@ def run_case(
     ``fixed:0`` for the others. With a fixed or profile latency, summary.json,
     trace.csv and config.yaml are the same bytes for the same seed; wall-clock figures
     go to timing.json. ``export_kitti``: also write the run's frames in the KITTI raw layout
-    into that folder (``sim.kitti_export``)."""
+    into that folder (``sim.kitti_export``). ``sensor``: ``sim.sensor.SensorEffects`` the
+    camera's images go through (``ScenarioSim``)."""
     wall0 = time.perf_counter()
     latency = latency or default_latency(controller)
     render = controller.needs_camera or video or export_kitti is not None
-    sim = ScenarioSim(case, camera, seed, render=render, actuator=actuator, textures=textures)
+    sim = ScenarioSim(case, camera, seed, render=render, actuator=actuator, textures=textures, sensor=sensor)
     writer = VideoWriter(out_dir / "camera.mp4", camera.fps_hz) if (video and out_dir is not None) else None
     lag = lag_meter_for(controller)
     exporter = None

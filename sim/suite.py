@@ -50,9 +50,10 @@ def run_cases(
     progress: bool = True,
     textures: TextureStyle = TextureStyle(),
     latency: LatencyMode | None = None,
+    sensor=None,
 ) -> list[dict]:
     """Run every case into ``out_dir/<case>/`` with the one ``controller`` (reset per run)
-    and write ``out_dir/summary.{csv,json}``."""
+    and write ``out_dir/summary.{csv,json}``; ``sensor``: as ``run_case``'s."""
     summaries = []
     it = cases
     if progress and len(cases) > 1:
@@ -62,7 +63,15 @@ def run_cases(
     for case in it:
         summaries.append(
             run_case(
-                case, controller, camera, seed, out_dir / case.name, video=video, textures=textures, latency=latency
+                case,
+                controller,
+                camera,
+                seed,
+                out_dir / case.name,
+                video=video,
+                textures=textures,
+                latency=latency,
+                sensor=sensor,
             )
         )
     write_table(out_dir, summaries)

@@ -16,6 +16,7 @@ _FLAGS = {
     "fps_hz": "--fps",
     "ahead_share": "--ahead-share",
     "fovea_share": "--fovea-share",
+    "realism_share": "--realism-share",
     "supersample": "--supersample",
     "ground_texture": "--ground-texture",
     "vehicle_texture": "--vehicle-texture",
@@ -75,6 +76,15 @@ def add_parser(sub) -> argparse.ArgumentParser:
         "slower or braking at 0.3-4 s TTC, or a lead at the ego's speed or pulling away), adjacent-lane and "
         "oncoming vehicles, ego 10-130 km/h (default 0: none, as in bittc_v1-v4)",
     )
+    p.add_argument(
+        "--realism-share",
+        type=float,
+        default=0.0,
+        metavar="SHARE",
+        help="this share of the samples goes through a camera sensor drawn per clip (sim.sensor): rolling shutter "
+        "and motion blur from the exact motion, defocus, vignetting, exposure, shot and read noise, tone curve, "
+        "JPEG (default 0: clean renders, as in every dataset the shipped weights were trained on)",
+    )
     p.add_argument("--workers", type=int, default=1, help="parallel worker processes or Ray tasks (default 1)")
     p.add_argument("--backend", default="local", choices=("local", "ray"), help="local (process pool, default) or ray")
     p.add_argument(
@@ -109,6 +119,7 @@ def _generate(args, h: int, w: int) -> dict:
         vehicle_texture=args.vehicle_texture,
         ahead_share=args.ahead_share,
         fovea_share=args.fovea_share,
+        realism_share=args.realism_share,
     )
     return generate(
         Path(args.out),

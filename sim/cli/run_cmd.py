@@ -42,8 +42,31 @@ def add_parser(sub) -> argparse.ArgumentParser:
         "view's horizontal field of view), a 64-beam velodyne scan ray-cast from the exact depth, calib, "
         "timestamps, oxts and bittc_truth.csv (one case only)",
     )
+    add_realism_flag(p)
     add_camera_flags(p)
     return p
+
+
+def add_realism_flag(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--realism",
+        action="store_true",
+        help="the camera's images go through a sensor drawn from --seed (sim.sensor: rolling shutter and motion "
+        "blur from the exact motion, defocus, vignetting, exposure, noise, tone curve, JPEG); printed",
+    )
+
+
+def sensor_from_args(args):
+    """``--realism`` -> the ``sim.sensor.SensorEffects`` drawn from ``--seed`` (printed), else None."""
+    if not args.realism:
+        return None
+    import numpy as np
+
+    from sim.sensor import REALISM_STREAM, draw_effects
+
+    sensor = draw_effects(np.random.default_rng([args.seed, REALISM_STREAM, 1]))
+    print(f"sensor: {json.dumps(sensor.as_dict())}")
+    return sensor
 
 
 def add_camera_flags(p: argparse.ArgumentParser) -> None:
@@ -116,15 +139,14 @@ def run(args) -> int:
     cases = scenarios.resolve(args.scenario)
     controller, latency = controller_from_args(args, camera)
     export = _export_dir(args.export_kitti, cases)
+    sensor = sensor_from_args(args)
     out = writable_dir(args.out)
+    kw = {"textures": textures, "latency": latency, "sensor": sensor}
     if len(cases) == 1:
-        kw = {"textures": textures, "latency": latency, "export_kitti": export}
-        s = run_case(cases[0], controller, camera, args.seed, out, video=args.video, **kw)
+        s = run_case(cases[0], controller, camera, args.seed, out, video=args.video, export_kitti=export, **kw)
         print(json.dumps(s, indent=2))
     else:
-        summaries = run_cases(
-            cases, controller, camera, args.seed, out, video=args.video, textures=textures, latency=latency
-        )
+        summaries = run_cases(cases, controller, camera, args.seed, out, video=args.video, **kw)
         print(format_table(summaries))
     print(f"wrote {Path(out)}")
     return 0

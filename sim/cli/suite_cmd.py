@@ -7,7 +7,7 @@ import argparse
 import scenarios
 from sim.cli.common import add_seed_flag, check_seed, writable_dir
 from sim.cli.loop_flags import add_controller_flags, controller_from_args
-from sim.cli.run_cmd import add_camera_flags, camera_from_args, textures_from_args
+from sim.cli.run_cmd import add_camera_flags, add_realism_flag, camera_from_args, sensor_from_args, textures_from_args
 
 
 def add_parser(sub) -> argparse.ArgumentParser:
@@ -27,6 +27,7 @@ def add_parser(sub) -> argparse.ArgumentParser:
     add_seed_flag(p, "scenery/appearance/traffic seed of every case")
     p.add_argument("--markdown", action="store_true", help="print the table as Markdown (as in the README)")
     p.add_argument("--video", action="store_true", help="also write camera.mp4 for every case")
+    add_realism_flag(p)
     add_camera_flags(p)
     return p
 
@@ -42,10 +43,10 @@ def run(args) -> int:
     else:
         cases = list(scenarios.bundled().cases.values())
     controller, latency = controller_from_args(args, camera)
+    sensor = sensor_from_args(args)
     out = writable_dir(args.out)
-    summaries = run_cases(
-        cases, controller, camera, args.seed, out, video=args.video, textures=textures, latency=latency
-    )
+    kw = {"textures": textures, "latency": latency, "sensor": sensor}
+    summaries = run_cases(cases, controller, camera, args.seed, out, video=args.video, **kw)
     print(format_table(summaries, markdown=args.markdown))
     print(f"wrote {out}/summary.csv")
     return 0

@@ -57,6 +57,7 @@ def prepare_dir(out: Path, cfg: GenerationConfig) -> None:
         old.setdefault("vehicle_texture", "plain")  # and the plain vehicles
         old.setdefault("ahead_share", 0.0)  # and no braking cases ahead
         old.setdefault("fovea_share", 0.0)  # and no fovea scenes
+        old.setdefault("realism_share", 0.0)  # and no sensor effects
         mine = asdict(cfg)
         for k in sorted(set(old) | set(mine)):
             if old.get(k) != mine.get(k):
@@ -69,7 +70,10 @@ def prepare_dir(out: Path, cfg: GenerationConfig) -> None:
     try:
         out.mkdir(parents=True, exist_ok=True)
         tmp = gen.with_name(".generation.yaml.tmp")
-        tmp.write_text(yaml.safe_dump(asdict(cfg), sort_keys=True))
+        settings = asdict(cfg)
+        if settings["realism_share"] == 0.0:  # the generation.yaml bytes of the datasets made before the option
+            del settings["realism_share"]
+        tmp.write_text(yaml.safe_dump(settings, sort_keys=True))
         os.replace(tmp, gen)
     except OSError as e:
         raise ConfigError(f"output folder {str(out)!r}: not writable ({e.strerror})") from None

@@ -60,6 +60,7 @@ def make_sample(cfg_dict: dict, split_dir: str, split: str, index: int) -> tuple
     """Render and write one sample; returns (index, seconds, error text or None)."""
     from sim.random_scene import render_clip
     from sim.scenery import RoadConfig
+    from sim.sensor import sensor_clip
     from sim.world import World
 
     if _WORKER.get("cfg") != GenerationConfig(**cfg_dict):
@@ -81,6 +82,7 @@ def make_sample(cfg_dict: dict, split_dir: str, split: str, index: int) -> tuple
             ahead_share=cfg.ahead_share,
             fovea_share=cfg.fovea_share,
         )
+        clip = sensor_clip(clip, scene_seed(cfg, split, index), cfg.realism_share)
         write_sample(
             Path(split_dir),
             index,
