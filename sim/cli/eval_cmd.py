@@ -41,6 +41,8 @@ SPLITS = ("train", "val", "test")
 
 
 def add_parser(sub) -> argparse.ArgumentParser:
+    from sim.cli.eval_kitti import add_kitti_flags
+
     p = sub.add_parser("eval", help="evaluate an estimator on a dataset split", description=__doc__.split("\n\n", 1)[1])
     p.add_argument("--data", default=None, help="dataset folder, or 'synthetic'")
     p.add_argument(
@@ -49,20 +51,7 @@ def add_parser(sub) -> argparse.ArgumentParser:
         metavar="SUITE",
         help="instead of --data: a suite (ncap, near, benign, all, demo), a bundled name or a YAML file",
     )
-    p.add_argument(
-        "--kitti-raw",
-        default=None,
-        metavar="DIR",
-        help="instead of --data: a KITTI raw drive (or `bittc run --export-kitti DIR`), its lead's TTC from the lidar",
-    )
-    p.add_argument(
-        "--strides",
-        type=int,
-        nargs="+",
-        default=None,
-        metavar="K",
-        help="with --kitti-raw: pair frames K apart, each read as the network's frame interval (default 1 to 16)",
-    )
+    add_kitti_flags(p)
     p.add_argument(
         "--tau",
         type=float,

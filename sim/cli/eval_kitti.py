@@ -16,6 +16,23 @@ from bittc_core.errors import CliError
 STRIDE_RANGE = (1, 16)
 
 
+def add_kitti_flags(p) -> None:
+    p.add_argument(
+        "--kitti-raw",
+        default=None,
+        metavar="DIR",
+        help="instead of --data: a KITTI raw drive (or `bittc run --export-kitti DIR`), its lead's TTC from the lidar",
+    )
+    p.add_argument(
+        "--strides",
+        type=int,
+        nargs="+",
+        default=None,
+        metavar="K",
+        help="with --kitti-raw: pair frames K apart, each read as the network's frame interval (default 1 to 16)",
+    )
+
+
 def check_kitti(args) -> None:
     from controllers.geofence import check_thresholds
 

@@ -1,0 +1,43 @@
+#!/usr/bin/env bash
+# A fine-tune of the shipped weights on images through the camera sensor model (docs/sensor.md),
+# averaged with its start.
+#
+#   1. data: bittc generate --out data/bittc_v7 --fovea-share 0.5 --vehicle-texture mixed --realism-share 0.5 --split val   --samples 400  --seed 7 --workers 2
+#            bittc generate --out data/bittc_v7 --fovea-share 0.5 --vehicle-texture mixed --realism-share 0.5 --split train --samples 8000 --seed 7 --workers 2
+#   2. this script: [START=FILE] [SHIP=1] bash docs/train_realism_weights.sh [DATA_V7] [OUT] [RELEASE]
+#
+# START is the shipped bittc-2026.12-fovea2-blend (bittc_core/weights/bittc_default.pt) by
+# default. bittc_v7 is bittc_v6's recipe (half the samples through a fovea, vehicles plain or
+# textured) with half of its clips through a sensor drawn per clip. One binary run with the
+# in-path vehicle pixels weighted (the checkpoint kept is the best by validation mIoU, on a
+# validation split half through a sensor too), then the frozen continuous stage; its best
+# checkpoint is written to OUT/release.pt with its release name. Last, the blend: the
+# element-wise mean of START and OUT/release.pt, OUT/blend.pt, named RELEASE-blend; SHIP=1
+# copies it to bittc_core/weights/bittc_default.pt. The config is the shipped one
+# (cpu-small-corr), so the latency does not change.
+set -euo pipefail
+DATA7=${1:-data/bittc_v7}
+OUT=${2:-runs/realism1}
+RELEASE=${3:-bittc-2026.12-realism1}
+BINARY_STEPS=${BINARY_STEPS:-1500}
+CONT_STEPS=${CONT_STEPS:-250}
+START=${START:-bittc_core/weights/bittc_default.pt}
+mkdir -p "$OUT"
+name_release() {  # name_release SRC DST NAME: SRC's weights as a release named NAME
+    python -c "import sys; from bittc_core.checkpoint import load_checkpoint, release_payload, save_checkpoint
+p = release_payload(load_checkpoint(sys.argv[1], map_location='cpu')); p['train_meta']['release'] = sys.argv[3]
+save_checkpoint(sys.argv[2], p)" "$1" "$2" "$3"
+}
+cp "$START" "$OUT/start.pt"  # the start as it was, whatever SHIP later replaces
+bittc train --data "$DATA7" --config cpu-small-corr --stage binary --steps "$BINARY_STEPS" --seed 70 --lr 5e-5 \
+    --warmup-steps 100 --val-every 500 --val-limit 256 --lovasz-weight 0.5 --actor-weight 2 --inpath-weight 4 \
+    --lr-mult segnet.corr_=10 --init "$OUT/start.pt" --out "$OUT/binary.pt"
+bittc train --data "$DATA7" --config cpu-small-corr --stage continuous --freeze-binary --steps "$CONT_STEPS" \
+    --warmup-steps 50 --seed 0 --lr 2e-4 --val-every 125 --init "$OUT/binary.pt" --out "$OUT/continuous.pt"
+name_release "$OUT/continuous.pt" "$OUT/release.pt" "$RELEASE"
+bittc weights average --out "$OUT/blend.tmp.pt" "$OUT/start.pt" "$OUT/release.pt"
+name_release "$OUT/blend.tmp.pt" "$OUT/blend.pt" "$RELEASE-blend" && rm "$OUT/blend.tmp.pt"
+if [ "${SHIP:-0}" = 1 ]; then
+    cp "$OUT/blend.pt" bittc_core/weights/bittc_default.tmp.pt && mv bittc_core/weights/bittc_default.tmp.pt bittc_core/weights/bittc_default.pt
+fi
+echo "wrote $OUT/release.pt ($RELEASE) and $OUT/blend.pt ($RELEASE-blend)"
