@@ -19,7 +19,7 @@ from __future__ import annotations
 import re
 from collections.abc import Iterator
 from dataclasses import dataclass
-from datetime import datetime
+from datetime import datetime, timezone
 from pathlib import Path
 
 import numpy as np
@@ -97,7 +97,7 @@ def read_timestamps(path: str | Path) -> np.ndarray:
         m = _KITTI_TIME.fullmatch(text)
         try:
             if m:
-                day = datetime.strptime(m.group(1), "%Y-%m-%d %H:%M:%S").timestamp()
+                day = datetime.strptime(m.group(1), "%Y-%m-%d %H:%M:%S").replace(tzinfo=timezone.utc).timestamp()
                 values.append(day + (float("0." + m.group(2)) if m.group(2) else 0.0))
             else:
                 values.append(float(text))

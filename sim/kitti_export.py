@@ -99,10 +99,7 @@ class KittiExporter:
         self.out = Path(out)
         if self.out.exists() and (not self.out.is_dir() or any(self.out.iterdir())):
             raise kr.FootageError(f"KITTI export folder {str(self.out)!r}: exists and is not empty")
-        self.out.parent.mkdir(parents=True, exist_ok=True)
-        self.tmp = Path(tempfile.mkdtemp(prefix=f".{self.out.name}-", dir=self.out.parent))
-        for sub in (kr.IMAGES, kr.VELODYNE, kr.OXTS):
-            (self.tmp / sub / "data").mkdir(parents=True)
+        self.tmp: Path | None = None  # made at the first frame, so a run that never starts leaves nothing
         self.pin = native_pinhole(sim.camera)
         self.bumper_ahead_m = EGO_SIZE_M[0] / 2 - sim.camera.mount_forward_m
         self.v2c = None
@@ -111,6 +108,11 @@ class KittiExporter:
 
     def __call__(self, rec, frame) -> None:
         i = len(self.times)
+        if self.tmp is None:
+            self.out.parent.mkdir(parents=True, exist_ok=True)
+            self.tmp = Path(tempfile.mkdtemp(prefix=f".{self.out.name}-", dir=self.out.parent))
+            for sub in (kr.IMAGES, kr.VELODYNE, kr.OXTS):
+                (self.tmp / sub / "data").mkdir(parents=True)
         if self.v2c is None:
             self.v2c = velo_to_cam(frame.cam_T_world)
             self.rows, self.cols = beam_pixels(self.pin, self.v2c)
@@ -147,4 +149,5 @@ class KittiExporter:
         return self.out
 
     def abort(self) -> None:
-        shutil.rmtree(self.tmp, ignore_errors=True)
+        if self.tmp is not None:
+            shutil.rmtree(self.tmp, ignore_errors=True)

@@ -112,12 +112,21 @@ def read_drive(folder: str | Path) -> KittiDrive:
             read_scan(p)  # raises, naming the file
     speed = None
     if (folder / OXTS / "data").is_dir():
-        rows = [np.array(p.read_text().split(), dtype=np.float64) for p in _frames(folder, OXTS, ".txt")]
-        bad = [i for i, r in enumerate(rows) if r.size != OXTS_FIELDS]
-        if len(rows) != len(times) or bad:
-            raise FootageError(f"drive {str(folder)!r}: oxts needs one line of {OXTS_FIELDS} numbers per frame")
-        speed = np.array([r[OXTS_VF] for r in rows])
+        files = _frames(folder, OXTS, ".txt")
+        if len(files) != len(times):
+            raise FootageError(f"drive {str(folder)!r}: {len(files)} oxts files for {len(times)} frames")
+        speed = np.array([_oxts_speed(p) for p in files])
     return KittiDrive(folder, cam["P_rect_02"].reshape(3, 4), rect @ rt, images, scans, times, speed)
+
+
+def _oxts_speed(path: Path) -> float:
+    try:
+        values = [float(x) for x in path.read_text().split()]
+    except ValueError:
+        raise FootageError(f"oxts {str(path)!r}: holds a value that is not a number") from None
+    if len(values) != OXTS_FIELDS:
+        raise FootageError(f"oxts {str(path)!r}: {len(values)} numbers, expected {OXTS_FIELDS}")
+    return values[OXTS_VF]
 
 
 def timestamp_lines(times_s) -> str:

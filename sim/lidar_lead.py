@@ -11,8 +11,9 @@ Per velodyne scan (velodyne frame: x forward, y left, z up, ``sim.kitti_raw``):
 3. **The lead's face**: the nearest such point with at least ``MIN_FACE_POINTS`` obstacle
    points within ``FACE_DEPTH_M`` behind it (a lone return is noise); the face is those
    points. Its depth is the ``FACE_PERCENTILE`` percentile of their distance ahead (x)
-   [m]: the nearest part of the face, along the road (the camera's pitch tilts its Z by
-   a few centimetres over the face's height).
+   less the camera's (the velodyne sits behind KITTI's camera) [m]: the nearest part of
+   the face, along the road, from the camera (its pitch tilts the camera's Z by a few
+   centimetres over the face's height).
 
 TTC per frame (``fit_ttc``): a polynomial through the face's depth over the frames within
 ``FIT_WINDOW_S`` / 2 of it (a parabola from 5 frames on, so a constant deceleration fits
@@ -47,7 +48,9 @@ STALL_SHARE = 0.3  # [-] nor is one below this share of the steps beside the fra
 
 @dataclass(frozen=True)
 class LeadObservation:
-    depth_m: float  # level distance ahead of the face [m] (its points' FACE_PERCENTILE x), NaN without a lead
+    depth_m: (
+        float  # level distance of the face ahead of the camera [m] (its points' FACE_PERCENTILE x), NaN without a lead
+    )
     face_cam: np.ndarray  # (N, 3) the face's points in the rectified camera frame [m]
     road_cam: np.ndarray  # (M, 3) corridor road points nearer than the lead, camera frame [m]
 
@@ -75,7 +78,8 @@ def find_lead(scan: np.ndarray, velo_to_cam: np.ndarray, half_width_m: float) ->
     face = obstacle & (x >= lead_x) & (x <= lead_x + FACE_DEPTH_M)
     face_cam = _to_cam(scan[face], velo_to_cam)
     road_cam = _to_cam(scan[road & (x < lead_x - 1.0)], velo_to_cam)
-    return LeadObservation(float(np.percentile(scan[face, 0], FACE_PERCENTILE)), face_cam, road_cam)
+    camera_x = float(np.linalg.inv(velo_to_cam)[0, 3])  # the camera's centre along x (KITTI: 0.27 m ahead)
+    return LeadObservation(float(np.percentile(scan[face, 0], FACE_PERCENTILE)) - camera_x, face_cam, road_cam)
 
 
 def fit_ttc(times_s: np.ndarray, depth_m: np.ndarray, window_s: float = FIT_WINDOW_S) -> np.ndarray:

@@ -7,7 +7,8 @@ into what a real camera would record, each effect drawn once per clip (``draw_ef
    from the frame's capture time, so it shows the scene moved by that share of the exact
    per-pixel motion (the pixel is sampled at x - flow x offset / dt).
 2. **Motion blur** (``exposure_s``): the mean of the scene over the exposure that ends at
-   the capture (samples at x - flow x s / dt, s in [0, exposure_s]).
+   the capture (samples at x + flow x s / dt, s in [0, exposure_s]: where what is at x now
+   was s earlier).
 3. **Defocus** (``defocus_px``): a Gaussian of that sigma [px].
 4. **Vignetting** (``vignetting``): the irradiance falls by that share at the corners,
    1 - v r^2 with r the distance from the centre over the half diagonal.
@@ -118,7 +119,8 @@ def apply_effects(
     if flow_px is not None and e.exposure_s > 0:
         reach = float(np.abs(flow_px).max()) * e.exposure_s / dt_s
         n = int(np.clip(np.ceil(reach), 1, MAX_BLUR_SAMPLES)) + 1
-        lin = np.mean([_sample(lin, flow_px, s / dt_s) for s in np.linspace(0.0, e.exposure_s, n)], axis=0)
+        # the scene s before the capture: what is now at x + flow s / dt (it has moved by flow s / dt since)
+        lin = np.mean([_sample(lin, flow_px, -s / dt_s) for s in np.linspace(0.0, e.exposure_s, n)], axis=0)
     if e.defocus_px > 0:
         lin = cv2.GaussianBlur(lin, (0, 0), e.defocus_px, borderType=cv2.BORDER_REPLICATE)
     if e.vignetting > 0:

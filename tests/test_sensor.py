@@ -36,7 +36,9 @@ def test_motion_blur_spreads_a_moving_edge_and_the_rolling_shutter_shears_it():
     blurred = apply_effects(img, SensorEffects(exposure_s=0.05), flow, 0.1, np.random.default_rng(0))
     row = blurred[10, :, 0].astype(int)
     ramp = np.flatnonzero((row > 10) & (row < 190))
-    assert 2 <= len(ramp) <= 5 and ramp.min() >= 24  # 4 px of motion, behind the edge (it moved right)
+    assert (
+        2 <= len(ramp) <= 5 and ramp.max() <= 24
+    )  # 4 px of motion over the exposure, behind the edge (it moved right)
     sheared = apply_effects(img, SensorEffects(readout_s=0.05), flow, 0.1, np.random.default_rng(0))
     first = [int(np.argmax(sheared[r, :, 0] > 100)) for r in (0, 23)]
     assert first[0] < 24 < first[1]  # the top row read early (the edge not yet there), the bottom late

@@ -69,8 +69,8 @@ def intrinsics(args):
         raise CliError(f"{' '.join(missing)}: a calibration needs --fx, --cx and --cy (--fy defaults to --fx)")
     try:
         return Intrinsics(manual["fx"], manual.get("fy", manual["fx"]), manual["cx"], manual["cy"])
-    except ValueError as e:
-        raise CliError(f"--{e}") from None
+    except ValueError as e:  # "fx_px -5: must be > 0" -> "--fx -5: must be > 0"
+        raise CliError("--" + str(e).replace("_px", "", 1)) from None
 
 
 def check(args, size, zoom):
