@@ -23,11 +23,7 @@ RELEASE=${3:-bittc-2026.12-fovea2}
 FOVEA_STEPS=${FOVEA_STEPS:-2000}
 CONT_STEPS=${CONT_STEPS:-250}
 mkdir -p "$OUT"
-name_release() {  # name_release SRC DST NAME: SRC's weights as a release named NAME
-    python -c "import sys; from bittc_core.checkpoint import load_checkpoint, release_payload, save_checkpoint
-p = release_payload(load_checkpoint(sys.argv[1], map_location='cpu')); p['train_meta']['release'] = sys.argv[3]
-save_checkpoint(sys.argv[2], p)" "$1" "$2" "$3"
-}
+source "$(dirname "$0")/release_steps.sh"
 if [ -z "${START:-}" ]; then  # bittc-2026.11 from the git history
     git show 71b3ae1:bittc_core/weights/bittc_default.pt > "$OUT/start.tmp.pt"
     START="$OUT/start.pt"
@@ -38,10 +34,4 @@ bittc train --data "$DATA6" --config cpu-small-corr --stage binary --steps "$FOV
     --init "$START" --out "$OUT/binary.pt"
 bittc train --data "$DATA6" --config cpu-small-corr --stage continuous --freeze-binary --steps "$CONT_STEPS" \
     --warmup-steps 50 --seed 0 --lr 2e-4 --val-every 125 --init "$OUT/binary.pt" --out "$OUT/continuous.pt"
-name_release "$OUT/continuous.pt" "$OUT/release.pt" "$RELEASE"
-bittc weights average --out "$OUT/blend.tmp.pt" "$START" "$OUT/release.pt"
-name_release "$OUT/blend.tmp.pt" "$OUT/blend.pt" "$RELEASE-blend" && rm "$OUT/blend.tmp.pt"
-if [ "${SHIP:-0}" = 1 ]; then
-    cp "$OUT/blend.pt" bittc_core/weights/bittc_default.tmp.pt && mv bittc_core/weights/bittc_default.tmp.pt bittc_core/weights/bittc_default.pt
-fi
-echo "wrote $OUT/release.pt ($RELEASE) and $OUT/blend.pt ($RELEASE-blend)"
+finish_release "$START" "$OUT" "$RELEASE"

@@ -23,21 +23,11 @@ BINARY_STEPS=${BINARY_STEPS:-1500}
 CONT_STEPS=${CONT_STEPS:-250}
 START=${START:-bittc_core/weights/bittc_default.pt}
 mkdir -p "$OUT"
-name_release() {  # name_release SRC DST NAME: SRC's weights as a release named NAME
-    python -c "import sys; from bittc_core.checkpoint import load_checkpoint, release_payload, save_checkpoint
-p = release_payload(load_checkpoint(sys.argv[1], map_location='cpu')); p['train_meta']['release'] = sys.argv[3]
-save_checkpoint(sys.argv[2], p)" "$1" "$2" "$3"
-}
+source "$(dirname "$0")/release_steps.sh"
 cp "$START" "$OUT/start.pt"  # the start as it was, whatever SHIP later replaces
 bittc train --data "$DATA7" --config cpu-small-corr --stage binary --steps "$BINARY_STEPS" --seed 70 --lr 5e-5 \
     --warmup-steps 100 --val-every 500 --val-limit 256 --lovasz-weight 0.5 --actor-weight 2 --inpath-weight 4 \
     --lr-mult segnet.corr_=10 --init "$OUT/start.pt" --out "$OUT/binary.pt"
 bittc train --data "$DATA7" --config cpu-small-corr --stage continuous --freeze-binary --steps "$CONT_STEPS" \
     --warmup-steps 50 --seed 0 --lr 2e-4 --val-every 125 --init "$OUT/binary.pt" --out "$OUT/continuous.pt"
-name_release "$OUT/continuous.pt" "$OUT/release.pt" "$RELEASE"
-bittc weights average --out "$OUT/blend.tmp.pt" "$OUT/start.pt" "$OUT/release.pt"
-name_release "$OUT/blend.tmp.pt" "$OUT/blend.pt" "$RELEASE-blend" && rm "$OUT/blend.tmp.pt"
-if [ "${SHIP:-0}" = 1 ]; then
-    cp "$OUT/blend.pt" bittc_core/weights/bittc_default.tmp.pt && mv bittc_core/weights/bittc_default.tmp.pt bittc_core/weights/bittc_default.pt
-fi
-echo "wrote $OUT/release.pt ($RELEASE) and $OUT/blend.pt ($RELEASE-blend)"
+finish_release "$OUT/start.pt" "$OUT" "$RELEASE"

@@ -57,6 +57,13 @@ class Intrinsics:
         )
 
 
+def view_intrinsics(intr: Intrinsics, box, size_hw: tuple[int, int]) -> Intrinsics:
+    """The intrinsics of a view: the crop ``box`` (u0, v0, u1, v1) [native px] of a frame
+    with ``intr``, resized to ``size_hw`` (the whole frame's box: the wide view)."""
+    u0, v0, u1, v1 = box
+    return intr.resized((v1 - v0, u1 - u0), size_hw, (u0, v0))
+
+
 def read_kitti_calib(path: str | Path, camera: str = KITTI_CAMERA) -> Intrinsics:
     """A KITTI raw ``calib_cam_to_cam.txt`` -> the rectified intrinsics of ``camera``
     (``P_rect_<camera>``: fx 0 cx tx / 0 fy cy ty / 0 0 1 0)."""
@@ -75,6 +82,15 @@ def read_kitti_calib(path: str | Path, camera: str = KITTI_CAMERA) -> Intrinsics
                 raise FootageError(f"calib {str(p)!r}: {key} has {len(v)} values, expected 12 (a 3x4 matrix)")
             return Intrinsics(v[0], v[5], v[2], v[6])
     raise FootageError(f"calib {str(p)!r}: no {key} key (the rectified projection of camera {camera})")
+
+
+def centred_box(center_uv, crop_wh: tuple[int, int], shape_hw: tuple[int, int]) -> tuple[int, int, int, int]:
+    """(u0, v0, u1, v1) [native px, u1 and v1 exclusive] of a crop of ``crop_wh`` pixels
+    centred on ``center_uv`` [px], shifted to lie inside a frame of ``shape_hw``."""
+    (u, v), (cw, ch), (H, W) = center_uv, crop_wh, shape_hw
+    u0 = min(max(int(round(u + 0.5 - cw / 2)), 0), W - cw)
+    v0 = min(max(int(round(v + 0.5 - ch / 2)), 0), H - ch)
+    return u0, v0, u0 + cw, v0 + ch
 
 
 def training_fovea_focal_px(size_hw: tuple[int, int], zoom: float) -> tuple[float, int]:
@@ -107,6 +123,4 @@ def fovea_crop(
         )
     u = intr.cx_px
     v = intr.cy_px - intr.fy_px * math.tan(math.radians(pitch_deg))
-    u0 = min(max(int(round(u + 0.5 - cw / 2)), 0), W - cw)
-    v0 = min(max(int(round(v + 0.5 - ch / 2)), 0), H - ch)
-    return (u0, v0, u0 + cw, v0 + ch), (h_f, w_f)
+    return centred_box((u, v), (cw, ch), shape_hw), (h_f, w_f)

@@ -37,7 +37,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from sim.footage_camera import Intrinsics, fovea_crop
+from sim.footage_camera import Intrinsics, fovea_crop, view_intrinsics
 from sim.footage_views import crop_view
 from sim.kitti_raw import KittiDrive
 from sim.lidar_lead import CORRIDOR_MARGIN_M, find_lead, fit_ttc
@@ -74,12 +74,12 @@ def drive_views(drive: KittiDrive, s: KittiEvalSettings) -> list[_View]:
     the pitch is the camera's against the level velodyne)."""
     h0, w0 = cv2.imread(str(drive.image_paths[0]), cv2.IMREAD_UNCHANGED).shape[:2]
     native = Intrinsics(*drive.intrinsics)
-    views = [_View("wide", (0, 0, w0, h0), s.size_hw, native.resized((h0, w0), s.size_hw))]
+    views = [_View("wide", (0, 0, w0, h0), s.size_hw, view_intrinsics(native, (0, 0, w0, h0), s.size_hw))]
     if s.fovea_zoom is not None:
         forward = drive.velo_to_cam[:3, :3].T @ np.array([0.0, 0.0, 1.0])  # the optical axis, velodyne frame
         pitch_deg = float(np.degrees(-np.arcsin(np.clip(forward[2], -1, 1))))
         box, hw = fovea_crop((h0, w0), native, s.fovea_zoom, s.size_hw, pitch_deg)
-        views.append(_View("fovea", box, hw, native.resized((box[3] - box[1], box[2] - box[0]), hw, box[:2])))
+        views.append(_View("fovea", box, hw, view_intrinsics(native, box, hw)))
     return views
 
 
@@ -105,9 +105,9 @@ def _read(drive: KittiDrive, i: int, views: list[_View]) -> dict[str, np.ndarray
     return {v.name: crop_view(rgb, v.box, v.size_hw) for v in views}
 
 
-def pair_rows(drive: KittiDrive, estimator, s: KittiEvalSettings, continuous: bool = True) -> list[dict]:
-    """One row per scored pair (see the module docstring)."""
-    leads, tau = lidar_truth(drive)
+def pair_rows(drive: KittiDrive, estimator, s: KittiEvalSettings, truth, continuous: bool = True) -> list[dict]:
+    """One row per scored pair (see the module docstring); ``truth``: ``lidar_truth(drive)``."""
+    leads, tau = truth
     views = drive_views(drive, s)
     ests = {
         v.name: estimator if v.name == "wide" or not hasattr(estimator, "fork") else estimator.fork() for v in views

@@ -104,13 +104,12 @@ def views_of(args, clip, size, zoom, intr):
     """-> {view: (crop box [native px], view size (H, W))} and the view's intrinsics (or None)."""
     from sim.cli.common import check_frame_size
     from sim.footage import FootageError
-    from sim.footage_camera import fovea_crop
+    from sim.footage_camera import fovea_crop, view_intrinsics
 
     H, W = clip.size_hw
     wide_hw = size or clip.size_hw
     check_frame_size(wide_hw, args.method, "--size" if size else f"the clip's {H}x{W} px frames")
     views = {"wide": ((0, 0, W, H), wide_hw)}
-    cams = {"wide": intr.resized((H, W), wide_hw) if intr else None}
     if zoom is not None:
         if intr is None:
             box, fovea_hw = fovea_box(clip.size_hw, zoom, size, args.fovea_center), size
@@ -122,8 +121,7 @@ def views_of(args, clip, size, zoom, intr):
             except FootageError as e:
                 raise CliError(f"--fovea {args.fovea}: {str(e).split(': ', 1)[1]}") from None
         views["fovea"] = (box, fovea_hw)
-        crop_hw = (box[3] - box[1], box[2] - box[0])
-        cams["fovea"] = intr.resized(crop_hw, fovea_hw, box[:2]) if intr else None
+    cams = {v: view_intrinsics(intr, box, hw) if intr else None for v, (box, hw) in views.items()}
     return views, cams
 
 
@@ -145,7 +143,6 @@ def fovea_box(shape_hw, zoom: float, size_hw, center_uv=None) -> tuple[int, int,
         raise CliError(
             f"--fovea-center {u:g} {v:g}: outside the {W}x{H} px frame (U in [0, {W - 1}], V in [0, {H - 1}])"
         )
-    cw_i, ch_i = int(round(cw)), int(round(ch))
-    u0 = min(max(int(round(u + 0.5 - cw_i / 2)), 0), W - cw_i)
-    v0 = min(max(int(round(v + 0.5 - ch_i / 2)), 0), H - ch_i)
-    return u0, v0, u0 + cw_i, v0 + ch_i
+    from sim.footage_camera import centred_box
+
+    return centred_box((u, v), (int(round(cw)), int(round(ch))), shape_hw)

@@ -75,7 +75,8 @@ def run_kitti(args, out: Path) -> int:
     drive = read_drive(args.kitti_raw)  # a FootageError names the file or key
     estimator = make_estimator(args.method, device=args.device, tta=args.tta, **args.backend_kw)
     settings = KittiEvalSettings(thresholds_s=tuple(args.tau), strides=args.strides, fovea_zoom=args.fovea_zoom)
-    rows = pair_rows(drive, estimator, settings)
+    truth = lidar_truth(drive)  # every scan read and fitted once, for the scores and the check
+    rows = pair_rows(drive, estimator, settings, truth)
     result = {
         "method": args.method,
         "weights": args.weights,
@@ -86,7 +87,7 @@ def run_kitti(args, out: Path) -> int:
     }
     exported = _truth_file(Path(args.kitti_raw), len(drive.times_s))
     if exported is not None:
-        result["lidar_truth_vs_export"] = truth_check(drive, lidar_truth(drive)[1], exported)
+        result["lidar_truth_vs_export"] = truth_check(drive, truth[1], exported)
     views = "wide view" + ("" if args.fovea_zoom is None else f" + fovea x{args.fovea_zoom:g}")
     print(
         f"{args.method} on {args.kitti_raw}, {views}: {len(rows)} pairs (strides {', '.join(map(str, args.strides))})"

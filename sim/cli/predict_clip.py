@@ -191,7 +191,9 @@ def _frame_loop(run: _ClipRun, video) -> list[dict]:
 
     from sim.video import hud
 
-    forks = {v: (run.est if v == "wide" or not hasattr(run.est, "fork") else run.est.fork()) for v in run.views}
+    forks = {}  # the network's own cache per view; the controller keeps its own
+    if run.ctrl is None:
+        forks = {v: (run.est if v == "wide" or not hasattr(run.est, "fork") else run.est.fork()) for v in run.views}
     scale = video.scale_for(run.views["wide"][1][1])
     idx = np.arange(len(run.partner))
     keep_back = int((idx - np.where(run.partner >= 0, run.partner, idx)).max())

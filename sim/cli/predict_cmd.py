@@ -53,6 +53,7 @@ from sim.cli.common import (
     writable_dir,
 )
 from sim.cli.predict_clip import run_clip
+from sim.footage_views import crop_view
 from sim.video import threshold_overlay as geofence_overlay
 
 DEFAULT_TAU_S = (0.5, 1.0, 2.0)  # [s] a pair's default fences
@@ -162,10 +163,7 @@ def _read_views(args, size, zoom) -> tuple[dict, tuple | None]:
     views, box = {}, None
     if zoom is not None:
         box = fovea_box(latest.shape[:2], zoom, size, args.fovea_center)
-        u0, v0, u1, v1 = box
-        views["fovea_"] = [
-            cv2.resize(im[v0:v1, u0:u1], size[::-1], interpolation=cv2.INTER_AREA) for im in (prev, latest)
-        ]
+        views["fovea_"] = [crop_view(im, box, size) for im in (prev, latest)]
     if size is not None:
         prev, latest = (cv2.resize(img, size[::-1], interpolation=cv2.INTER_AREA) for img in (prev, latest))
     check_frame_size(latest.shape[:2], args.method, "--size" if size is not None else "PREV and LATEST")
