@@ -93,3 +93,23 @@ def create_vehicle_bodies(c, spec: VehicleSpec, tex: dict[str, int]) -> tuple[in
         basePosition=[0, 0, -50.0],
     )
     return uid, wheel_uid, float(base_pos[2])
+
+
+def create_part_body(c, part) -> int:
+    """One rigid part of a road user (``sim.vru.VruPart``) on client ``c``, its frame at the
+    part's pivot, hidden 50 m below the ground until posed; returns its uid. Boxes keep their
+    own colours; a wheel is a dark cylinder about the part's y axis."""
+    if part.wheel_radius_m > 0:
+        r = part.wheel_radius_m
+        mesh = meshes.merge(meshes.WHEEL, [[r, part.wheel_width_m, r]], [[0.0, 0.0, 0.0]])
+        vs = c.createVisualShape(p.GEOM_MESH, rgbaColor=[0.08, 0.08, 0.08, 1.0], **mesh)
+    else:
+        if not 0 < len(part.boxes) <= MAX_SHAPES_PER_BODY:
+            raise ValueError(f"part {part.name!r} has {len(part.boxes)} boxes: need 1..{MAX_SHAPES_PER_BODY}")
+        vs = c.createVisualShapeArray(
+            shapeTypes=[p.GEOM_BOX] * len(part.boxes),
+            halfExtents=[list(b.half_m) for b in part.boxes],
+            visualFramePositions=[list(b.center_m) for b in part.boxes],
+            rgbaColors=[[*b.rgb, 1.0] for b in part.boxes],
+        )
+    return c.createMultiBody(0, -1, vs, basePosition=[0, 0, -50.0])

@@ -47,6 +47,7 @@ def compute_ground_truth(
     motions: dict[int, np.ndarray],
     dt_s: float,
     far_m: float,
+    parts: np.ndarray | None = None,
 ) -> GroundTruth:
     """Ground truth of the latest frame.
 
@@ -55,29 +56,28 @@ def compute_ground_truth(
         instance: (H, W) instance ids of the latest render.
         K: 3x3 intrinsics (pixel centres at integers).
         cam1_T_world, cam0_T_world: OpenCV camera poses at t1 and t0 (4x4).
-        motions: instance id -> 4x4 ``world(t0) <- world(t1)`` rigid motion of that
+        motions: body id -> 4x4 ``world(t0) <- world(t1)`` rigid motion of that
             body, i.e. ``world_T_body(t0) @ inv(world_T_body(t1))``. Missing ids
             (static scenery, id 0) are static: the identity.
         dt_s: t1 - t0 [s].
+        parts: (H, W) part ids of the latest render (``sim.world.Render.part``): the body
+            each pixel moves with, when road users' limbs move on their own; None: each
+            pixel moves with its instance.
     """
     H, W = depth_m.shape
     fx, fy, cx, cy = K[0, 0], K[1, 1], K[0, 2], K[1, 2]
     v1, u1 = np.mgrid[0:H, 0:W].astype(np.float64)
     Z1 = depth_m.astype(np.float64)
     P_c1 = np.stack([(u1 - cx) / fx * Z1, (v1 - cy) / fy * Z1, Z1, np.ones_like(Z1)], axis=-1)
-    # One 4x4 per pixel: cam0 <- world(t0) <- world(t1) <- cam1.
+    # One 4x4 per rigid body: cam0 <- world(t0) <- world(t1) <- cam1.
     world_T_cam1 = np.linalg.inv(cam1_T_world)
-    n_ids = int(max([0, *motions.keys(), int(instance.max(initial=0))])) + 1
-    lut = np.repeat(np.eye(4)[None], n_ids, axis=0)
-    for k, M in motions.items():
-        lut[k] = M
-    chain = cam0_T_world[None] @ lut @ world_T_cam1[None]  # (n_ids, 4, 4)
-    idx = np.clip(instance, 0, None)
-    P_c0 = P_c1 @ chain[0].T  # static world (and sky, masked below)
+    static = cam0_T_world @ world_T_cam1
+    idx = np.clip(instance if parts is None else parts, 0, None)
+    P_c0 = P_c1 @ static.T  # static world (and sky, masked below)
     for k in np.unique(idx):
-        if k > 0:
+        if k > 0 and int(k) in motions:
             m = idx == k
-            P_c0[m] = P_c1[m] @ chain[k].T
+            P_c0[m] = P_c1[m] @ (cam0_T_world @ motions[int(k)] @ world_T_cam1).T
     Z0 = P_c0[..., 2]
     valid = (instance >= 0) & (Z1 < far_m) & (Z0 > 1e-3)
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -112,6 +112,11 @@ def body_motions(poses_prev: dict, poses_latest: dict) -> dict[int, np.ndarray]:
     """instance -> ``world(t0) <- world(t1)`` motion from planar poses (x, y, heading)
     at both frames, as :func:`compute_ground_truth` takes it."""
     return {i: planar_pose(*poses_prev[i]) @ np.linalg.inv(planar_pose(*poses_latest[i])) for i in poses_latest}
+
+
+def part_motions(parts_prev: dict, parts_latest: dict) -> dict[int, np.ndarray]:
+    """part id -> ``world(t0) <- world(t1)`` motion from the world_T_part (4x4) of both frames."""
+    return {k: parts_prev[k] @ np.linalg.inv(T) for k, T in parts_latest.items() if k in parts_prev}
 
 
 def camera_pose(cam_T_ego_: np.ndarray, ego_pose: tuple[float, float, float]) -> np.ndarray:

@@ -10,8 +10,11 @@ pays a fixed cost per body created (the render cost is rasterisation and barely
 depends on the body count).
 
 Convention: world frame z up, x along the road, y left (see :mod:`sim.camera`).
-Instance ids: -1 = nothing (sky), 0 = static scenery, 1..N = vehicles in the order
-they were added.
+Instance ids: -1 = nothing (sky), 0 = static scenery, 1..N = actors (vehicles and road
+users) in the order they were added. Part ids (``Render.part``) name the rigid body a
+pixel lies on: a vehicle's part id is its instance id; each rigid part of a road user
+(:mod:`sim.vru`) has its own id from ``PART_ID_BASE`` on, so that its motion can differ
+from its trunk's.
 """
 
 from __future__ import annotations
@@ -31,10 +34,11 @@ with c_output_suppressed():
     from pybullet_utils import bullet_client
 
 from sim import textures
-from sim.bodies import create_static_bodies, create_vehicle_bodies
+from sim.bodies import create_part_body, create_static_bodies, create_vehicle_bodies
 from sim.camera import CameraConfig, Pinhole, view_matrix_gl
 from sim.scenery import RoadConfig, Scenery, StaticShape, build_scenery
 from sim.vehicles import VehicleSpec
+from sim.vru import VruSpec, parts
 
 
 @dataclass
@@ -42,19 +46,39 @@ class Render:
     """One rendered frame at the camera's output resolution.
 
     rgb: (H, W, 3) uint8. depth_m: (H, W) float32, depth Z along the optical axis [m]
-    (``far_m`` where nothing was hit). instance: (H, W) int32 (-1 sky, 0 static, >0 vehicle).
+    (``far_m`` where nothing was hit). instance: (H, W) int32 (-1 sky, 0 static, >0 actor).
+    part: (H, W) int32, the rigid part (see the module docstring); None where no road user
+    was rendered (then every part is its instance).
     """
 
     rgb: np.ndarray
     depth_m: np.ndarray
     instance: np.ndarray
+    part: np.ndarray | None = None
 
 
+PART_ID_BASE = 1 << 20  # part ids of road users' rigid parts start here (instances stay below)
 SCENES_PER_CLIENT = 256  # reconnect after this many resets: removeBody keeps the visual shape records
 
 
 def _quat_z(heading_rad: float) -> list[float]:
     return [0.0, 0.0, math.sin(heading_rad / 2), math.cos(heading_rad / 2)]
+
+
+def _quat_from_matrix(R: np.ndarray) -> list[float]:
+    """(x, y, z, w) quaternion of a rotation matrix (Shepperd's method, stable for any angle)."""
+    tr = float(np.trace(R))
+    i = int(np.argmax([tr, R[0, 0], R[1, 1], R[2, 2]]))
+    if i == 0:
+        w = math.sqrt(1.0 + tr) / 2
+        return [(R[2, 1] - R[1, 2]) / (4 * w), (R[0, 2] - R[2, 0]) / (4 * w), (R[1, 0] - R[0, 1]) / (4 * w), w]
+    a, b, c = (i - 1, i % 3, (i + 1) % 3)
+    q = [0.0, 0.0, 0.0, 0.0]
+    q[a] = math.sqrt(max(1.0 + R[a, a] - R[b, b] - R[c, c], 0.0)) / 2
+    q[b] = (R[b, a] + R[a, b]) / (4 * q[a])
+    q[c] = (R[c, a] + R[a, c]) / (4 * q[a])
+    q[3] = (R[c, b] - R[b, c]) / (4 * q[a])
+    return q
 
 
 class World:
@@ -122,6 +146,8 @@ class World:
         self._wheel_uid: dict[int, int] = {}  # instance id -> body uid of its wheels
         self._vehicle_pose: dict[int, tuple[float, float, float]] = {}
         self._vehicle_base_z: dict[int, float] = {}  # lower-body centre height [m]
+        self._part_of_uid: dict[int, int] = {}  # body uid of a road user's part -> part id
+        self._vru_parts: dict[int, list[tuple[int, int]]] = {}  # instance -> [(part id, uid)]
         if light_direction is None:
             az = self.rng.uniform(0, 2 * math.pi)
             el = self.rng.uniform(math.radians(25), math.radians(70))
@@ -206,7 +232,7 @@ class World:
             "glass": self.texture("glass", variant, spec.palette_index),
         }
         uid, wheel_uid, base_z = create_vehicle_bodies(c, spec, tex)
-        instance = len(self._vehicle_uid) + 1
+        instance = self._next_instance()
         self._vehicle_uid[instance] = uid
         self._wheel_uid[instance] = wheel_uid
         self._vehicle_base_z[instance] = base_z
@@ -214,7 +240,32 @@ class World:
         self._register(wheel_uid, instance)
         return instance
 
+    def _next_instance(self) -> int:
+        return len(self._vehicle_uid) + len(self._vru_parts) + 1
+
+    def add_vru(self, spec: VruSpec) -> tuple[int, list[int]]:
+        """Add a pedestrian or cyclist (hidden until posed) -> (instance id, part id of each
+        part of ``sim.vru.parts(spec)``, in order); ``set_part_poses`` moves the parts."""
+        instance = self._next_instance()
+        self._vru_parts[instance] = []
+        for part in parts(spec):
+            uid = create_part_body(self.client, part)
+            part_id = PART_ID_BASE + len(self._part_of_uid)
+            self._register(uid, instance)
+            self._part_of_uid[uid] = part_id
+            self._vru_parts[instance].append((part_id, uid))
+        return instance, [pid for pid, _ in self._vru_parts[instance]]
+
     # ------------------------------------------------------------------ state
+    def set_part_poses(self, instance: int, world_T_parts: list[np.ndarray]) -> None:
+        """Place each part of road user ``instance`` at its world_T_part (4x4, ``sim.vru.part_poses``)."""
+        entries = self._vru_parts[instance]
+        if len(world_T_parts) != len(entries):
+            raise ValueError(f"road user {instance} has {len(entries)} parts, got {len(world_T_parts)} poses")
+        for (_, uid), T in zip(entries, world_T_parts):
+            q = _quat_from_matrix(np.asarray(T)[:3, :3])
+            self.client.resetBasePositionAndOrientation(uid, [float(v) for v in T[:3, 3]], q)
+
     def set_vehicle_pose(self, instance: int, x_m: float, y_m: float, heading_rad: float) -> None:
         """Place a vehicle: footprint centre (x, y) on the ground, heading about z [rad]."""
         uid = self._vehicle_uid[instance]
@@ -222,6 +273,17 @@ class World:
         self.client.resetBasePositionAndOrientation(uid, [x_m, y_m, z], _quat_z(heading_rad))
         self.client.resetBasePositionAndOrientation(self._wheel_uid[instance], [x_m, y_m, 0.0], _quat_z(heading_rad))
         self._vehicle_pose[instance] = (float(x_m), float(y_m), float(heading_rad))
+
+    @property
+    def part_lut(self) -> np.ndarray | None:
+        """int32 array: body uid -> part id (its instance for every body but a road user's
+        parts; -1 for uids of no body); None when the world holds no road user."""
+        if not self._part_of_uid:
+            return None
+        lut = self.instance_lut
+        for uid, pid in self._part_of_uid.items():
+            lut[uid] = pid
+        return lut
 
     @property
     def instance_lut(self) -> np.ndarray:
@@ -257,9 +319,13 @@ class World:
         obj = np.where(seg >= 0, seg & 0xFFFFFF, -1)
         lut = self.instance_lut
         instance = np.where(obj >= 0, lut[np.clip(obj, 0, len(lut) - 1)], -1).astype(np.int32)
+        part_lut = self.part_lut
+        part = None
+        if part_lut is not None:
+            part = np.where(obj >= 0, part_lut[np.clip(obj, 0, len(part_lut) - 1)], -1).astype(np.int32)
         depth = cam.linear_depth(depth_buf)
         depth[instance < 0] = cam.far_m
-        return Render(rgb=rgb, depth_m=depth, instance=instance)
+        return Render(rgb=rgb, depth_m=depth, instance=instance, part=part)
 
     def _raw(self, w: int, h: int, view, proj, flags):
         _, _, rgba, depth, seg = self.client.getCameraImage(
