@@ -31,15 +31,20 @@ def bundled() -> Catalog:
 #: named sets of bundled families (``bittc scenarios --suites``); a suite resolves to every case of them
 SUITES: dict[str, str] = {
     "ncap": "every Euro NCAP car-to-car case: CCRs, CCRs-offset, CCRm, CCRb",
-    "benign": "every benign scenario (no warning or brake expected)",
+    "benign": "every benign scenario on the straight road with vehicles only (no warning or brake expected)",
     "near": "actors entering the ego's lane close ahead: a slow van merging 15-25 m ahead, close cut-ins, "
     "a GVT at +-75 % overlap (what the wide view is for)",
+    "vru": "every Euro NCAP pedestrian and cyclist case: CPFA, CPNA, CPNCO, CPLA, CBNA, CBNAO, CBFA, CBLA",
+    "junction": "every Euro NCAP junction and crossing-traffic case: CCFtap, CCCscp, CCFhos",
+    "benign-vru": "the benign counterparts of the road-user and junction cases (no warning or brake expected)",
     "all": "every bundled case",
     "demo": "three cases that show the trade-off: CCRs-50 (K decides), CCRb-12m-6mps2 (the oracle cannot "
     "avoid it either), benign-oncoming (no false alarm)",
 }
 NCAP_FAMILIES = ("CCRs", "CCRs-offset", "CCRm", "CCRb")
 NEAR_FAMILIES = ("near-merge", "near-cut-in", "near-gvt-offset")
+VRU_FAMILIES = ("CPFA", "CPNA", "CPNCO", "CPLA", "CBNA", "CBNAO", "CBFA", "CBLA")
+JUNCTION_FAMILIES = ("CCFtap", "CCCscp", "CCFhos")
 DEMO_CASES = ("CCRs-50", "CCRb-12m-6mps2", "benign-oncoming")
 
 
@@ -49,7 +54,13 @@ def resolve_suite(name: str) -> list[ScenarioCase]:
     if name == "ncap":
         return [c for f in NCAP_FAMILIES for c in cat.families[f]]
     if name == "benign":
-        return [c for cases in cat.families.values() for c in cases if not c.threat]
+        return [c for cases in cat.families.values() for c in cases if not c.threat and not c.open_paths]
+    if name == "benign-vru":
+        return [c for cases in cat.families.values() for c in cases if not c.threat and c.open_paths]
+    if name == "vru":
+        return [c for f in VRU_FAMILIES for c in cat.families[f]]
+    if name == "junction":
+        return [c for f in JUNCTION_FAMILIES for c in cat.families[f]]
     if name == "near":
         return [c for f in NEAR_FAMILIES for c in cat.families[f]]
     if name == "all":

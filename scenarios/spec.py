@@ -41,37 +41,31 @@ from typing import Any
 import yaml
 
 from bittc_core.errors import ConfigError
-from scenarios.checks import check_keys, check_name, check_not_list, check_unswept, fail, integer, number
+from scenarios.checks import check_keys, check_name, check_unswept, fail, integer, number
+from scenarios.paths import TURNS, ego_path, path_leaves_road
+from scenarios.protocols import PROTOCOLS
 from scenarios.road import RoadConfig
 from scenarios.sweep_fields import flatten_sweeps, fmt_value, set_flat
-from scenarios.vehicle_classes import VEHICLE_CLASSES
+from scenarios.vehicle_spec import ACTOR_KEYS, ActorSpec, LaneChange, vehicle_actor
+from scenarios.vru_spec import VRU_KEYS, VruActorSpec, check_placement, is_vru_entry, vru_actor, vru_placement
+
+__all__ = ["ActorSpec", "EgoSpec", "LaneChange", "ScenarioCase", "VruActorSpec", "expand", "load_file"]
 
 
-@dataclass(frozen=True)
-class LaneChange:
-    start_s: float
-    duration_s: float
-    to_lane: int
-
-
-@dataclass(frozen=True)
-class ActorSpec:
-    vehicle: str = "car"
-    lane: int = 0
-    direction: str = "same"
-    speed_kph: float = 0.0
-    overlap_pct: float = 100.0
-    headway_s: float | None = None
-    headway_m: float | None = None
-    decel_mps2: float = 0.0
-    brake_onset_s: float = 0.0
-    accel_mps2: float = 0.0
-    lane_change: LaneChange | None = None
+#: default turn radius [m] of the ego's path at a junction, per turn (a left turn sweeps wider)
+DEFAULT_TURN_RADIUS_M = {"left": 12.0, "right": 7.0, "straight": 12.0}
 
 
 @dataclass(frozen=True)
 class EgoSpec:
     speed_kph: float = 50.0
+    turn: str = "straight"  # straight | left | right (at road.junction_m)
+    turn_radius_m: float | None = None  # [m] None: DEFAULT_TURN_RADIUS_M
+    conflict_s: float = 4.0  # [s] when its front would reach a crossing road user's line without braking
+
+    @property
+    def radius_m(self) -> float:
+        return self.turn_radius_m if self.turn_radius_m is not None else DEFAULT_TURN_RADIUS_M[self.turn]
 
 
 @dataclass(frozen=True)
@@ -85,9 +79,29 @@ class ScenarioCase:
     duration_s: float
     road: RoadConfig
     ego: EgoSpec
-    actors: tuple[ActorSpec, ...]
+    actors: tuple[ActorSpec | VruActorSpec, ...]
     traffic: int = 0
     source: str = ""
+    protocol: str = ""  # the test protocol (and version) the family follows, see scenarios.protocols
+
+    @property
+    def path(self):
+        """The ego's nominal path (``scenarios.paths.EgoPath``)."""
+        return ego_path(self.ego.turn, self.road, self.ego.radius_m)
+
+    @property
+    def vrus(self) -> tuple[VruActorSpec, ...]:
+        return tuple(a for a in self.actors if isinstance(a, VruActorSpec))
+
+    @property
+    def open_paths(self) -> bool:
+        """True when in-path decisions need the actors' future paths: road users, a
+        junction, a turning ego or a car timed to meet the ego's path."""
+        return bool(
+            self.vrus
+            or self.road.junction_m is not None
+            or any(getattr(a, "offset_s", None) is not None for a in self.actors)
+        )
 
     def to_dict(self) -> dict[str, Any]:
         d = asdict(self)
@@ -95,13 +109,11 @@ class ScenarioCase:
         return d
 
 
-_TOP_KEYS = {"name", "description", "threat", "case_name", "duration_s", "road", "ego", "actors", "traffic"}
+_TOP_KEYS = {"name", "description", "threat", "case_name", "duration_s", "road", "ego", "actors", "traffic", "protocol"}
 _ROAD_KEYS = {f.name for f in fields(RoadConfig)}
 _ROAD_COMPUTED = {"x_start_m", "x_end_m", "markings_max_x_m"}  # set by the simulator from the scenario
 _ROAD_DEFAULTS = {f.name: f.default for f in fields(RoadConfig)}
 _EGO_KEYS = {f.name for f in fields(EgoSpec)}
-_ACTOR_KEYS = {f.name for f in fields(ActorSpec)}
-_LC_KEYS = {f.name for f in fields(LaneChange)}
 
 
 def load_file(path: str | Path) -> list[ScenarioCase]:
@@ -131,7 +143,10 @@ def expand(raw: Any, src: str) -> list[ScenarioCase]:
     if not isinstance(actors, list):
         raise fail(src, "actors", actors, "must be a list")
     for i, a in enumerate(actors):
-        check_keys(src, f"actors[{i}]", a, _ACTOR_KEYS)
+        check_keys(src, f"actors[{i}]", a, VRU_KEYS if is_vru_entry(a) else ACTOR_KEYS)
+    protocol = raw.get("protocol", "")
+    if protocol and protocol not in PROTOCOLS:
+        raise fail(src, "protocol", protocol, f"unknown protocol (known: {', '.join(sorted(PROTOCOLS))})")
     names, values = flatten_sweeps(raw)
     for n, vs in zip(names, values):
         if len(vs) == 0:
@@ -169,8 +184,23 @@ def _resolve(r: dict, case_name: str, src: str) -> ScenarioCase:
         raise fail(src, "threat", r["threat"], "must be true or false")
     duration = number(src, "duration_s", r.get("duration_s", 12.0), 0.5, 120.0)
     road = _road(r.get("road") or {}, src)
-    ego = EgoSpec(speed_kph=number(src, "ego.speed_kph", r["ego"].get("speed_kph", 50.0), 0.0, 200.0))
-    actors = tuple(_actor(a, f"actors[{i}]", src, road, ego, duration) for i, a in enumerate(r["actors"]))
+    ego = _ego(r["ego"], src, road, duration)
+    heights = [
+        float(a.get("height_m", 1.8)) for a in r["actors"] if isinstance(a, dict) and a.get("pedestrian") == "adult"
+    ]
+    actors = []
+    for i, a in enumerate(r["actors"]):
+        k = f"actors[{i}]"
+        if is_vru_entry(a):
+            vru = vru_actor(a, k, src, heights)
+            if vru.crossing and ego.turn != "straight":
+                raise fail(src, "ego.turn", ego.turn, "a crossing road user needs a straight ego path")
+            check_placement(
+                vru, vru_placement(vru, ego.speed_kph / 3.6, ego.conflict_s), k, src, road, duration, ego.conflict_s
+            )
+            actors.append(vru)
+        else:
+            actors.append(vehicle_actor(a, k, src, road, ego.speed_kph, duration))
     traffic = integer(src, "traffic", r.get("traffic", 0), 0, 12)
     description = r.get("description", "")
     if not isinstance(description, str):
@@ -183,16 +213,46 @@ def _resolve(r: dict, case_name: str, src: str) -> ScenarioCase:
         duration_s=duration,
         road=road,
         ego=ego,
-        actors=actors,
+        actors=tuple(actors),
         traffic=traffic,
         source=src,
+        protocol=r.get("protocol", ""),
     )
+
+
+def _ego(e: dict, src: str, road: RoadConfig, duration: float) -> EgoSpec:
+    speed = number(src, "ego.speed_kph", e.get("speed_kph", 50.0), 0.0, 200.0)
+    turn = e.get("turn", "straight")
+    if turn not in TURNS:
+        raise fail(src, "ego.turn", turn, f"must be one of {', '.join(TURNS)}")
+    if turn != "straight" and road.junction_m is None:
+        raise fail(src, "ego.turn", turn, "the turn leaves the road network: set road.junction_m")
+    radius = e.get("turn_radius_m")
+    if radius is not None:
+        radius = number(src, "ego.turn_radius_m", radius, 4.0, 60.0)
+    ego = EgoSpec(speed, turn, radius, number(src, "ego.conflict_s", e.get("conflict_s", 4.0), 1.0, 30.0))
+    if turn != "straight":
+        path = ego_path(turn, road, ego.radius_m)
+        if path.turn_start_s < 0:
+            raise fail(src, "road.junction_m", road.junction_m, f"the {turn} turn would start behind the ego")
+        off = path_leaves_road(path, road, speed / 3.6 * duration + 20.0)
+        if off is not None:
+            raise fail(
+                src,
+                "ego.turn_radius_m",
+                ego.radius_m,
+                f"the ego's path leaves the road network at ({off[0]:.1f}, {off[1]:.1f}) m",
+            )
+    return ego
 
 
 def _road(road_raw: dict, src: str) -> RoadConfig:
     check_keys(src, "road", road_raw, _ROAD_KEYS - _ROAD_COMPUTED)
     road_kw = {}
     for k, v in road_raw.items():
+        if k == "junction_m":
+            road_kw[k] = number(src, "road.junction_m", v, 20.0, 1e4)
+            continue
         default = _ROAD_DEFAULTS[k]
         if isinstance(default, bool):
             if not isinstance(v, bool):
@@ -206,55 +266,6 @@ def _road(road_raw: dict, src: str) -> RoadConfig:
         return RoadConfig(**road_kw)
     except ValueError as e:
         raise ConfigError(f"{src}: road: {e}") from None
-
-
-def _actor(a: dict, k: str, src: str, road: RoadConfig, ego: EgoSpec, duration: float) -> ActorSpec:
-    vehicle = a.get("vehicle", "car")
-    if vehicle not in VEHICLE_CLASSES:
-        raise fail(src, f"{k}.vehicle", vehicle, f"unknown vehicle (known: {', '.join(sorted(VEHICLE_CLASSES))})")
-    lane = integer(src, f"{k}.lane", a.get("lane", 0), -road.lanes_right, road.lanes_left)
-    direction = a.get("direction", "same")
-    if direction not in ("same", "oncoming"):
-        raise fail(src, f"{k}.direction", direction, "must be 'same' or 'oncoming'")
-    hs, hm = a.get("headway_s"), a.get("headway_m")
-    if (hs is None) == (hm is None):
-        raise fail(src, f"{k}.headway_s/headway_m", (hs, hm), "give exactly one of them")
-    if hs is not None:
-        number(src, f"{k}.headway_s", hs, 0.0, 60.0, lo_open=True)
-        if ego.speed_kph == 0:
-            raise fail(src, f"{k}.headway_s", hs, "a time headway needs a moving ego (use headway_m)")
-    if hm is not None:
-        number(src, f"{k}.headway_m", hm, 0.0, 500.0, lo_open=True)
-    decel = number(src, f"{k}.decel_mps2", a.get("decel_mps2", 0.0), 0.0, 12.0)
-    accel = number(src, f"{k}.accel_mps2", a.get("accel_mps2", 0.0), 0.0, 6.0)
-    if decel > 0 and accel > 0:
-        raise fail(src, f"{k}.accel_mps2", accel, "cannot be combined with decel_mps2")
-    return ActorSpec(
-        vehicle=vehicle,
-        lane=lane,
-        direction=direction,
-        speed_kph=number(src, f"{k}.speed_kph", a.get("speed_kph", 0.0), 0.0, 200.0),
-        overlap_pct=number(src, f"{k}.overlap_pct", a.get("overlap_pct", 100.0), -100.0, 100.0),
-        headway_s=None if hs is None else float(hs),
-        headway_m=None if hm is None else float(hm),
-        decel_mps2=decel,
-        brake_onset_s=number(src, f"{k}.brake_onset_s", a.get("brake_onset_s", 0.0), 0.0, duration),
-        accel_mps2=accel,
-        lane_change=_lane_change(a.get("lane_change"), k, src, road, duration),
-    )
-
-
-def _lane_change(lc_raw, k: str, src: str, road: RoadConfig, duration: float) -> LaneChange | None:
-    if lc_raw is None:
-        return None
-    check_keys(src, f"{k}.lane_change", lc_raw, _LC_KEYS)
-    for lk, lv in lc_raw.items():
-        check_not_list(src, f"{k}.lane_change.{lk}", lv)
-    return LaneChange(
-        start_s=number(src, f"{k}.lane_change.start_s", lc_raw.get("start_s", 0.0), 0.0, duration),
-        duration_s=number(src, f"{k}.lane_change.duration_s", lc_raw.get("duration_s", 2.0), 0.5, 10.0),
-        to_lane=integer(src, f"{k}.lane_change.to_lane", lc_raw.get("to_lane", 0), -road.lanes_right, road.lanes_left),
-    )
 
 
 @dataclass

@@ -11,3 +11,6 @@ VEHICLE_CLASSES: dict[str, tuple[tuple[float, float], tuple[float, float], tuple
     "van": ((4.8, 5.5), (1.9, 2.05), (1.9, 2.4)),
     "truck": ((7.0, 10.0), (2.4, 2.55), (3.0, 3.6)),
 }
+
+#: the ego's (length, width, height) [m]; Euro NCAP files use a 1.815 m ego width
+EGO_SIZE_M = (4.6, 1.815, 1.45)

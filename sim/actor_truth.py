@@ -28,6 +28,7 @@ class ActorTruth:
     ttc_s: float  # [s], +inf when not closing or not ahead
     in_path: bool
     ahead: bool
+    must_brake: bool = False  # open paths only: contact follows even with full braking from shortly after now
 
 
 def half_extents_xy(length_m: float, width_m: float, heading_rad: float) -> tuple[float, float]:

@@ -11,35 +11,30 @@ What a run hands out is in ``sim.episode_records``, where its scripted actors st
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import replace
 
 import numpy as np
 
-from scenarios.spec import ScenarioCase
+from scenarios.spec import ScenarioCase, VruActorSpec
 from sim import episode_contact
 from sim.actor_truth import ActorTruth, actor_truth
 from sim.camera import CameraConfig
-from sim.episode_placement import actor_placement, overlap_offset_m
+from sim.episode_actors import Actor, obstruction_poses, vehicle_start, walker_for
+from sim.episode_placement import overlap_offset_m
 from sim.episode_records import Collision, Frame, StepTruth
 from sim.ground_truth import GroundTruth
+from sim.path_truth import path_truth
 from sim.stepping import capture_pose, pair_ground_truth, step_traffic, substeps
 from sim.textures import TextureStyle
 from sim.traffic import ActuatorConfig, EgoVehicle, ScriptedVehicle, TrafficVehicle, build_road
-from sim.vehicles import EGO_SIZE_M, VehicleSpec, footprints_overlap, sample_spec
+from sim.vehicles import EGO_SIZE_M, footprints_overlap, sample_spec
+from sim.vru import part_poses, vru_spec
 
 __all__ = ["Collision", "Frame", "ScenarioSim", "StepTruth", "overlap_offset_m"]
 
 STANDSTILL_MPS = 0.01  # [m/s]
 POST_COLLISION_S = 1.0  # a run ends this long after the first contact [s] (Euro NCAP)
 VIEW_MARGIN_M = 250.0  # road built this far beyond the furthest vehicle [m]
-
-
-@dataclass
-class _Actor:
-    instance: int
-    spec: VehicleSpec
-    vehicle: ScriptedVehicle | TrafficVehicle
-    initial_speed_mps: float
 
 
 class ScenarioSim:
@@ -92,22 +87,33 @@ class ScenarioSim:
         placements = []
         far_x = 0.0
         for a in case.actors:
+            if isinstance(a, VruActorSpec):
+                spec = vru_spec(a.kind, rng, a.height_m)
+                walker = walker_for(a, spec, v_ego, case.ego.conflict_s)
+                placements.append((a, spec, walker))
+                far_x = max(far_x, walker.pose_at(case.duration_s)[0])
+                continue
             spec = sample_spec(rng, a.vehicle)
-            x, y, heading = actor_placement(a, spec, v_ego, case.road)
+            x, y, heading = vehicle_start(a, spec, v_ego, case)
             placements.append((a, spec, x, y, heading))
             far_x = max(far_x, x + (a.speed_kph / 3.6 if a.direction == "same" else 0.0) * case.duration_s)
         far_x = max(far_x, v_ego * case.duration_s) + VIEW_MARGIN_M
         road = replace(case.road, x_end_m=far_x)
         self.road_cfg = road
         self.road = build_road(road, self.seed)
-        self.ego = EgoVehicle(self.road, 0.0, 0.0, v_ego, ego_len, ego_w, self.actuator, self.sim_dt_s)
+        self.path = case.path
+        self.ego = EgoVehicle(self.road, 0.0, 0.0, v_ego, ego_len, ego_w, self.actuator, self.sim_dt_s, path=self.path)
         self.road.vehicles.append(self.ego)
         if self.render_enabled:
             from sim.world import World
 
             self.world = World(self.camera, road, seed=self.seed, style=self.textures)
-        self.actors: list[_Actor] = []
-        for a, spec, x, y, heading in placements:
+        self.actors: list[Actor] = []
+        for a, spec, *where in placements:
+            if isinstance(a, VruActorSpec):
+                self._add_vru(a, spec, where[0], v_ego)
+                continue
+            x, y, heading = where
             lc = None
             if a.lane_change is not None:
                 lc = (a.lane_change.start_s, a.lane_change.duration_s, road.lane_center_y_m(a.lane_change.to_lane))
@@ -122,14 +128,27 @@ class ScenarioSim:
                 accel_mps2=-a.decel_mps2 if a.decel_mps2 > 0 else a.accel_mps2,
                 brake_onset_s=a.brake_onset_s if a.decel_mps2 > 0 else 0.0,
                 lane_change=lc,
+                keep_lateral=a.direction in ("same", "oncoming"),  # crossing cars drive straight on
             )
             self._add_actor(spec, veh)
         self._add_background_traffic(v_ego)
 
-    def _add_actor(self, spec: VehicleSpec, veh) -> None:
+    def _add_actor(self, spec, veh) -> None:
         self.road.vehicles.append(veh)
         instance = self.world.add_vehicle(spec) if self.world is not None else len(self.actors) + 1
-        self.actors.append(_Actor(instance, spec, veh, float(veh.speed)))
+        self.actors.append(Actor(instance, spec, veh, float(veh.speed)))
+
+    def _add_vru(self, a: VruActorSpec, spec, walker, v_ego: float) -> None:
+        """A road user (stepped beside the highway-env traffic), and the parked cars that hide it."""
+        if self.world is not None:
+            instance, part_ids = self.world.add_vru(spec)
+        else:
+            instance, part_ids = len(self.actors) + 1, []
+        self.actors.append(Actor(instance, spec, walker, walker.v, part_ids))
+        if a.obstruction:
+            for i, (x, y, h) in enumerate(obstruction_poses(a, v_ego, self.case.ego.conflict_s, (4.5, 1.8))):
+                car = sample_spec(self.rng, "van" if i == 0 else "car")
+                self._add_actor(car, ScriptedVehicle(self.road, x, y, h, 0.0, car.length_m, car.width_m))
 
     def _add_background_traffic(self, v_ego: float) -> None:
         lanes = [k for k in range(-self.road_cfg.lanes_right, self.road_cfg.lanes_left + 1) if k != 0]
@@ -147,6 +166,20 @@ class ScenarioSim:
     # ------------------------------------------------------------------ state
     def actor_truths(self) -> list[ActorTruth]:
         ego_pose = self.ego.world_pose()
+        if self.case.open_paths:  # contact from both exact futures (sim.path_truth)
+            return [
+                path_truth(
+                    a.instance,
+                    self.path,
+                    ego_pose,
+                    EGO_SIZE_M[:2],
+                    float(self.ego.speed),
+                    a.vehicle,
+                    (a.spec.length_m, a.spec.width_m),
+                    self.t_s,
+                )
+                for a in self.actors
+            ]
         return [
             actor_truth(
                 a.instance,
@@ -181,12 +214,18 @@ class ScenarioSim:
         poses = {a.instance: a.vehicle.world_pose() for a in self.actors}
         if self.world is None:
             return Frame(self.t_s, None, cam_T_world, poses)
-        for inst, pose in poses.items():
-            self.world.set_vehicle_pose(inst, *pose)
+        part_T: dict[int, np.ndarray] = {}
+        for a in self.actors:
+            if a.is_vru:
+                Ts = part_poses(a.spec, poses[a.instance], a.vehicle.travelled_m)
+                self.world.set_part_poses(a.instance, Ts)
+                part_T.update(zip(a.part_ids, Ts))
+            else:
+                self.world.set_vehicle_pose(a.instance, *poses[a.instance])
         r = self.world.render(cam_T_world)
         fovea = self.camera.fovea()
         f = self.world.render(cam_T_world, pinhole=fovea) if fovea is not None else None
-        frame = Frame(self.t_s, r.rgb, cam_T_world, poses, r.depth_m, r.instance, f)
+        frame = Frame(self.t_s, r.rgb, cam_T_world, poses, r.depth_m, r.instance, f, r.part, part_T)
         if self.sensor is not None:
             frame = self._through_sensor(frame)
         return frame
@@ -213,12 +252,16 @@ class ScenarioSim:
         vx, vy = self.ego.world_velocity()
         shift = np.eye(4)
         shift[:3, 3] = (vx * dt, vy * dt, 0.0)  # world_T_cam moved back by v dt
-        poses = {}
+        poses, part_T = {}, {}
         for a in self.actors:
             x, y, h = frame.poses[a.instance]
             ax, ay = a.vehicle.world_velocity()
             poses[a.instance] = (x - ax * dt, y - ay * dt, h)
-        return Frame(frame.t_s - dt, None, frame.cam_T_world @ shift, poses)
+            for pid in a.part_ids:  # limbs moved back with the body, their swing kept
+                T = frame.part_poses[pid].copy()
+                T[:2, 3] -= (ax * dt, ay * dt)
+                part_T[pid] = T
+        return Frame(frame.t_s - dt, None, frame.cam_T_world @ shift, poses, part_poses=part_T)
 
     def ground_truth(self, prev: Frame, latest: Frame, view: str = "wide") -> GroundTruth:
         """Exact per-pixel ground truth of ``latest`` against ``prev`` in view 'wide' or 'fovea'."""
@@ -232,6 +275,9 @@ class ScenarioSim:
             latest.poses,
             prev.poses,
             latest.t_s - prev.t_s,
+            latest.parts(view),
+            latest.part_poses,
+            prev.part_poses,
         )
 
     # ------------------------------------------------------------------ stepping
@@ -246,7 +292,11 @@ class ScenarioSim:
         """Integrate one traffic step with a requested ego deceleration [m/s^2]."""
         dt = self.sim_dt_s
         if self.collision is None:
-            step_traffic(self.road, self.ego, [a.vehicle for a in self.actors], decel_mps2, self.t_s, dt)
+            vehicles = [a.vehicle for a in self.actors if not a.is_vru]
+            step_traffic(self.road, self.ego, vehicles, decel_mps2, self.t_s, dt)
+            for a in self.actors:
+                if a.is_vru:
+                    a.vehicle.step(dt)
         self.t_s = round(self.t_s + dt, 9)
         self.ego_braked |= self.ego.current_accel_mps2 < -0.5
         if self.collision is None:
@@ -262,8 +312,8 @@ class ScenarioSim:
             along = np.array([math.cos(heading), math.sin(heading)])
             v_rel = float(self.ego.speed) - float(a.vehicle.world_velocity() @ along)
             self.collision = Collision(self.t_s, a.instance, float(self.ego.speed), v_rel)
-            for v in self.road.vehicles:  # both come to rest at the contact (highway-env does too)
-                v.speed = 0.0
+            for v in [*self.road.vehicles, *(a.vehicle for a in self.actors if a.is_vru)]:
+                v.speed = 0.0  # all come to rest at the contact (highway-env does too)
 
     def done(self, truth: StepTruth) -> str | None:
         """Why the run ends now, or None."""
@@ -286,7 +336,7 @@ class ScenarioSim:
             return "duration"
         return None
 
-    def _actor(self, instance: int) -> _Actor:
+    def _actor(self, instance: int) -> Actor:
         return next(a for a in self.actors if a.instance == instance)
 
     def close(self) -> None:

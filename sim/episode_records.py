@@ -39,7 +39,9 @@ class StepTruth:
 class Frame:
     """A captured frame: the wide view's image (H, W, 3) uint8, exact depth and instances,
     the fovea's render (``sim.world.Render``, same pose) when the camera has one, and the
-    poses (world x [m], y [m], heading [rad]) of every actor at capture time."""
+    poses (world x [m], y [m], heading [rad]) of every actor at capture time. Road users'
+    rigid parts: ``part`` (the wide view's part ids, ``sim.world.Render.part``) and
+    ``part_poses`` (part id -> world_T_part, 4x4)."""
 
     t_s: float
     image: np.ndarray | None
@@ -48,6 +50,14 @@ class Frame:
     depth_m: np.ndarray | None = None
     instance: np.ndarray | None = None
     fovea: Render | None = None
+    part: np.ndarray | None = None
+    part_poses: dict[int, np.ndarray] = field(default_factory=dict)
+
+    def parts(self, name: str) -> np.ndarray | None:
+        """The part ids of view 'wide' or 'fovea' (None where no road user was rendered)."""
+        if name == "wide":
+            return self.part
+        return self.fovea.part if self.fovea is not None else None
 
     def view(self, name: str) -> tuple[np.ndarray | None, np.ndarray | None, np.ndarray | None]:
         """(image, depth_m, instance) of view 'wide' or 'fovea' (Nones where not rendered)."""

@@ -88,12 +88,29 @@ class _Builder:
         self._group(texture, (1.0, 1.0, 1.0)).shapes.append(StaticShape.sphere(center_m, radius_m))
 
 
+def _band(road: RoadConfig) -> tuple[float, float] | None:
+    """x range [m] the cross road and its sidewalks take out of the main road's sides."""
+    if road.junction_m is None:
+        return None
+    hw = road.cross_half_width_m + road.sidewalk_m
+    return road.junction_m - hw, road.junction_m + hw
+
+
+def _pieces(x0: float, x1: float, band: tuple[float, float] | None) -> list[tuple[float, float]]:
+    """[x0, x1] without the junction ``band``: 0, 1 or 2 intervals [m]."""
+    if band is None or x1 <= band[0] or x0 >= band[1]:
+        return [(x0, x1)]
+    return [(a, b) for a, b in ((x0, band[0]), (band[1], x1)) if b - a > 1e-6]
+
+
 def build_scenery(road: RoadConfig, rng: np.random.Generator) -> Scenery:
     """The road, markings and roadside objects of ``road`` (static bodies), drawn from ``rng``."""
     m = _Builder()
     x0, x1 = road.x_start_m, road.x_end_m
     yl, yr = road.y_left_edge_m, road.y_right_edge_m
     road_w = yl - yr
+    band = _band(road)
+    sw = road.sidewalk_m
     v = int(rng.integers(VARIANTS))
     asphalt = [m.texture("asphalt", v + i) for i in range(2)]
     grass = [m.texture("grass", v)] * 2
@@ -102,37 +119,78 @@ def build_scenery(road: RoadConfig, rng: np.random.Generator) -> Scenery:
     for i in range(n_seg):
         xc = x0 + (i + 0.5) * road.segment_m
         m.box((xc, (yl + yr) / 2, -0.05), (road.segment_m / 2, road_w / 2, 0.05), asphalt[i % 2])
-        for side, edge in ((1, yl), (-1, yr)):  # verges, 30 m wide
-            m.box((xc, edge + side * 15.0, -0.06), (road.segment_m / 2, 15.0, 0.05), grass[(i + side) % 2])
-        if road.barrier:
-            for edge, side in ((yl, 1), (yr, -1)):
-                m.box((xc, edge + side * 1.2, 0.45), (road.segment_m / 2 - 0.05, 0.15, 0.35), concrete)
+        for a, b in _pieces(xc - road.segment_m / 2, xc + road.segment_m / 2, band):
+            xm, hx = (a + b) / 2, (b - a) / 2
+            for side, edge in ((1, yl), (-1, yr)):  # sidewalks behind kerbs, then verges 30 m wide
+                if sw > 0:
+                    m.box((xm, edge + side * sw / 2, -0.03), (hx, sw / 2, 0.05), concrete)
+                    m.box((xm, edge + side * 0.075, 0.06), (hx, 0.075, 0.06), None, KERB_RGB)
+                m.box((xm, edge + side * (sw + 15.0), -0.06), (hx, 15.0, 0.05), grass[(i + side) % 2])
+                if road.barrier and sw == 0:
+                    m.box((xm, edge + side * 1.2, 0.45), (hx - 0.05, 0.15, 0.35), concrete)
     # Lane markings: solid edges, dashed separators (3 m dash, 9 m gap).
     white = (0.95, 0.95, 0.95)
     for edge in (yl - 0.15, yr + 0.15):
         for i in range(n_seg):
             xc = x0 + (i + 0.5) * road.segment_m
-            m.box((xc, edge, 0.003), (road.segment_m / 2, 0.075, 0.003), None, white)
+            for a, b in _pieces(xc - road.segment_m / 2, xc + road.segment_m / 2, band):
+                m.box(((a + b) / 2, edge, 0.003), ((b - a) / 2, 0.075, 0.003), None, white)
     for k in range(-road.lanes_right, road.lanes_left):
         y = (k + 0.5) * road.lane_width_m
         for xd in np.arange(x0, x1 if road.markings_max_x_m is None else min(x1, road.markings_max_x_m), 12.0):
-            m.box((xd + 1.5, y, 0.003), (1.5, 0.075, 0.003), None, white)
-    _roadside(m, road, rng)
+            if band is None or xd + 3.0 <= band[0] or xd >= band[1]:
+                m.box((xd + 1.5, y, 0.003), (1.5, 0.075, 0.003), None, white)
+    if band is not None:
+        _cross_road(m, road, asphalt[0], concrete, grass[0], white)
+    _roadside(m, road, rng, band)
     return m.scenery
 
 
-def _roadside(m: _Builder, road: RoadConfig, rng: np.random.Generator) -> None:
-    """Poles, signs, trees and buildings on both sides, at several lateral depths."""
+KERB_RGB = (0.72, 0.72, 0.7)
+CROSS_ROAD_M = 120.0  # [m] the cross road's length on each side of the main road
+
+
+def _cross_road(m: _Builder, road: RoadConfig, asphalt, concrete, grass, white) -> None:
+    """The cross road at x = junction_m: carriageway, centre line, sidewalks and verges on
+    both sides of the main road."""
+    J, hw, sw = road.junction_m, road.cross_half_width_m, road.sidewalk_m
+    for side, edge in ((1, road.y_left_edge_m), (-1, road.y_right_edge_m)):
+        y_mid = edge + side * CROSS_ROAD_M / 2
+        m.box((J, y_mid, -0.05), (hw, CROSS_ROAD_M / 2, 0.05), asphalt)
+        for yd in np.arange(sw + 2.0, CROSS_ROAD_M, 12.0):
+            m.box((J, edge + side * (yd + 1.5), 0.003), (0.075, 1.5, 0.003), None, white)
+        for xs in (1, -1):
+            if sw > 0:
+                m.box(
+                    (J + xs * (hw + sw / 2), y_mid + side * sw, -0.03), (sw / 2, CROSS_ROAD_M / 2 - sw, 0.05), concrete
+                )
+                m.box(
+                    (J + xs * (hw + 0.075), y_mid + side * sw, 0.06),
+                    (0.075, CROSS_ROAD_M / 2 - sw, 0.06),
+                    None,
+                    KERB_RGB,
+                )
+            m.box((J + xs * (hw + sw + 15.0), y_mid + side * sw, -0.06), (15.0, CROSS_ROAD_M / 2 - sw, 0.05), grass)
+
+
+def _roadside(m: _Builder, road: RoadConfig, rng: np.random.Generator, band=None) -> None:
+    """Poles, signs, trees and buildings on both sides, at several lateral depths (none
+    where they would stand on the cross road, or on its sidewalks)."""
     v = int(rng.integers(VARIANTS))
     metal = m.texture("metal", v)
     bark = m.texture("bark", v)
     leaves = [m.texture("foliage", v + i) for i in range(2)]
     facades = [m.texture("facade", v + i) for i in range(3)]
     sign = m.texture("sign", v)
-    for side, edge in ((1, road.y_left_edge_m), (-1, road.y_right_edge_m)):
+    for side, edge0 in ((1, road.y_left_edge_m), (-1, road.y_right_edge_m)):
         x = road.x_start_m + rng.uniform(0, road.roadside_spacing_m)
         while x < road.x_end_m:
             kind = rng.choice(["pole", "tree", "tree", "sign", "building", "building"])
+            half = 13.0 if kind == "building" else 1.0  # the largest half width of the kind [m]
+            if band is not None and band[0] - half < x < band[1] + half:
+                x += rng.uniform(0.5, 1.5) * road.roadside_spacing_m
+                continue
+            edge = edge0 + side * road.sidewalk_m
             if kind == "pole":
                 y = edge + side * rng.uniform(2.0, 3.0)
                 m.box((x, y, 4.0), (0.12, 0.12, 4.0), metal)

@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from sim.camera import CameraConfig, Pinhole, cam_T_ego
-from sim.ground_truth import GroundTruth, body_motions, camera_pose, compute_ground_truth
+from sim.ground_truth import GroundTruth, body_motions, camera_pose, compute_ground_truth, part_motions
 
 SIM_DT_S = 0.01  # traffic integration step [s]
 
@@ -49,10 +49,19 @@ def pair_ground_truth(
     poses: dict[int, Pose],
     prev_poses: dict[int, Pose],
     dt_s: float,
+    parts: np.ndarray | None = None,
+    part_poses: dict[int, np.ndarray] | None = None,
+    prev_part_poses: dict[int, np.ndarray] | None = None,
 ) -> GroundTruth:
     """Exact ground truth of the latest frame seen through ``view`` (its depth, instances
     and pose) against the previous one, ``dt_s`` [s] earlier; actors' motions from their
     poses in both frames. Both views of a camera share its pose, so the wide view and the
-    fovea get their maps from this same code."""
+    fovea get their maps from this same code. Road users' rigid parts move with their own
+    motions: ``parts`` (the render's part ids) and each part's world_T_part (4x4) in both
+    frames (``sim.vru.part_poses``)."""
     motions = body_motions(prev_poses, poses)
-    return compute_ground_truth(depth_m, instance, view.K(), cam_T_world, prev_cam_T_world, motions, dt_s, view.far_m)
+    if parts is not None:
+        motions.update(part_motions(prev_part_poses or {}, part_poses or {}))
+    return compute_ground_truth(
+        depth_m, instance, view.K(), cam_T_world, prev_cam_T_world, motions, dt_s, view.far_m, parts=parts
+    )

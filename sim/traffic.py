@@ -141,7 +141,10 @@ class ScriptedVehicle(_Sized, Vehicle):
 
 
 class EgoVehicle(_Sized, Vehicle):
-    """The ego: lane keeping on its start lane, braking through an actuator model."""
+    """The ego: lane keeping on its start lane (or, with ``path``, pure pursuit along that
+    ``scenarios.paths.EgoPath``), braking through an actuator model. ``yaw_rate_radps``: its
+    yaw rate in the world frame [rad/s] (+ turning left) over the last step, as a car's
+    yaw-rate sensor reads it."""
 
     def __init__(
         self,
@@ -153,9 +156,12 @@ class EgoVehicle(_Sized, Vehicle):
         width_m: float,
         actuator: ActuatorConfig,
         sim_dt_s: float,
+        path=None,
     ):
         super().__init__(road, np.array([x_m, -y_m], float), 0.0, speed_mps)
         self.set_size(length_m, width_m)
+        self.path = path
+        self.yaw_rate_radps = 0.0
         self.actuator = actuator
         self.y_lane_m = y_m
         n_delay = int(round(actuator.delay_s / sim_dt_s))
@@ -173,7 +179,13 @@ class EgoVehicle(_Sized, Vehicle):
         a = self.current_accel_mps2 + float(np.clip(target - self.current_accel_mps2, -step, step))
         self.current_accel_mps2 = a
         applied = a if self.speed + a * dt_s >= 0.0 else -self.speed / dt_s
-        self.action = {"acceleration": applied, "steering": _lateral_steering(self, self.y_lane_m, 0.0)}
+        if self.path is None or self.path.turn == "straight":
+            steering = _lateral_steering(self, self.y_lane_m, 0.0)
+        else:
+            steering = _pursuit_steering(self, self.path)
+        self.action = {"acceleration": applied, "steering": steering}
+        beta = math.atan(0.5 * math.tan(steering))  # highway-env's bicycle model, mirrored
+        self.yaw_rate_radps = -float(self.speed) * math.sin(beta) / (self.LENGTH / 2)
 
 
 class TrafficVehicle(_Sized, IDMVehicle):
@@ -207,3 +219,21 @@ def _lateral_steering(v: Vehicle, y_ref_m: float, dy_ref_mps: float) -> float:
     err = math.atan2(math.sin(desired - heading), math.cos(desired - heading))
     steer_world = float(np.clip(HEADING_GAIN * err, -0.5, 0.5))
     return -steer_world  # highway-env's heading is mirrored
+
+
+PURSUIT_LOOKAHEAD_S = 0.6  # [s] pure pursuit looks this far ahead along the path
+PURSUIT_MIN_LOOKAHEAD_M = 2.5  # [m]
+
+
+def _pursuit_steering(v: Vehicle, path) -> float:
+    """Steering [rad] (highway-env's sign) of pure pursuit along ``path`` (world frame): the
+    curvature 2 sin(alpha) / L_d that meets the path point L_d ahead, turned into the
+    bicycle model's steering angle."""
+    x, y, heading = v.world_pose()
+    ld = max(PURSUIT_LOOKAHEAD_S * abs(v.speed), PURSUIT_MIN_LOOKAHEAD_M)
+    tx, ty, _ = path.pose_at(path.closest_s(x, y) + ld)
+    alpha = math.atan2(ty - y, tx - x) - heading
+    kappa = 2 * math.sin(alpha) / ld
+    sin_beta = float(np.clip(kappa * v.LENGTH / 2, -0.5, 0.5))
+    delta = math.atan(2 * math.tan(math.asin(sin_beta)))
+    return -delta

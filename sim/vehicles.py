@@ -13,10 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from scenarios.vehicle_classes import VEHICLE_CLASSES  # noqa: F401  (re-exported)
-
-# Size ranges (length, width, height) [m] per class.
-EGO_SIZE_M = (4.6, 1.815, 1.45)  # Euro NCAP files use a 1.815 m ego width
+from scenarios.vehicle_classes import EGO_SIZE_M, VEHICLE_CLASSES  # noqa: F401  (re-exported)
 
 PALETTE = [
     (0.8, 0.1, 0.1),

@@ -22,18 +22,22 @@ from dataclasses import dataclass
 
 import numpy as np
 
-ADULT_HEIGHT_M = 1.8  # [m] Euro NCAP EPTa
-CHILD_HEIGHT_M = 1.15  # [m] Euro NCAP EPTc
-CYCLIST_HEIGHT_M = 1.8  # [m] the rider of the EBTa, standing
-BICYCLE_LENGTH_M = 1.9  # [m]
+from scenarios.road_users import (  # noqa: F401  (re-exported)
+    ADULT_HEIGHT_M,
+    BICYCLE_LENGTH_M,
+    CHILD_HEIGHT_M,
+    CYCLIST_HEIGHT_M,
+    DEFAULT_HEIGHT_M,
+    VRU_CLASS,
+    VRU_KINDS,
+    footprint_m,
+)
+
 BICYCLE_WHEEL_RADIUS_M = 0.35  # [m] 28-inch wheel
 LEG_SWING_DEG = 25.0  # [deg] hip swing amplitude while walking
 ARM_SWING_DEG = 18.0  # [deg] shoulder swing amplitude
 GAIT_CYCLE_PER_HEIGHT = 0.8  # [-] distance of one gait cycle (two steps) / body height
 
-VRU_KINDS = ("adult", "child", "cyclist")
-#: the class of each kind in ground truth and datasets (see ``sim.actor_classes``)
-VRU_CLASS = {"adult": "pedestrian", "child": "pedestrian", "cyclist": "cyclist"}
 
 SKIN = (0.85, 0.68, 0.55)
 CLOTHES = [(0.15, 0.2, 0.45), (0.55, 0.1, 0.1), (0.2, 0.35, 0.2), (0.85, 0.8, 0.7), (0.25, 0.25, 0.25)]
@@ -56,11 +60,14 @@ class VruSpec:
             raise ValueError(f"VruSpec.height_m = {self.height_m} outside [0.5, 2.2] m")
 
     @property
-    def footprint_m(self) -> tuple[float, float]:
-        """(length, width) [m] of the contact footprint, length along the direction of travel."""
-        if self.kind == "cyclist":
-            return BICYCLE_LENGTH_M, 0.6
-        return 0.3 * self.height_m / ADULT_HEIGHT_M, 0.5 * self.height_m / ADULT_HEIGHT_M
+    def length_m(self) -> float:
+        """[m] the contact footprint along the direction of travel."""
+        return footprint_m(self.kind, self.height_m)[0]
+
+    @property
+    def width_m(self) -> float:
+        """[m] the contact footprint across the direction of travel."""
+        return footprint_m(self.kind, self.height_m)[1]
 
     @property
     def cls(self) -> str:
@@ -69,12 +76,11 @@ class VruSpec:
 
 def vru_spec(kind: str, rng: np.random.Generator, height_m: float | None = None) -> VruSpec:
     """A target of ``kind`` with colours drawn from ``rng`` (height: the Euro NCAP target's)."""
-    default = {"adult": ADULT_HEIGHT_M, "child": CHILD_HEIGHT_M, "cyclist": CYCLIST_HEIGHT_M}
-    if kind not in default:
+    if kind not in DEFAULT_HEIGHT_M:
         raise ValueError(f"unknown road user kind {kind!r}; known: {', '.join(VRU_KINDS)}")
     return VruSpec(
         kind,
-        float(default[kind] if height_m is None else height_m),
+        float(DEFAULT_HEIGHT_M[kind] if height_m is None else height_m),
         int(rng.integers(len(CLOTHES))),
         int(rng.integers(len(TROUSERS))),
     )

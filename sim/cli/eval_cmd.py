@@ -49,7 +49,8 @@ def add_parser(sub) -> argparse.ArgumentParser:
         "--scenarios",
         default=None,
         metavar="SUITE",
-        help="instead of --data: a suite (ncap, near, benign, all, demo), a bundled name or a YAML file",
+        help="instead of --data: a suite (ncap, near, benign, vru, junction, benign-vru, all, demo), a bundled "
+        "name or a YAML file",
     )
     add_kitti_flags(p)
     p.add_argument(

@@ -10,7 +10,11 @@ import scenarios
 def add_parser(sub) -> argparse.ArgumentParser:
     p = sub.add_parser("scenarios", help="list bundled scenarios")
     p.add_argument("--cases", action="store_true", help="list every expanded case, not only families")
-    p.add_argument("--suites", action="store_true", help="list the named suites (ncap, near, benign, all, demo)")
+    p.add_argument(
+        "--suites",
+        action="store_true",
+        help="list the named suites (ncap, near, benign, vru, junction, benign-vru, all, demo)",
+    )
     return p
 
 

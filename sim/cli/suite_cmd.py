@@ -22,7 +22,8 @@ def add_parser(sub) -> argparse.ArgumentParser:
     p.add_argument(
         "--scenarios",
         default=None,
-        help="comma-separated suites (ncap, near, benign, all, demo), families or cases (default: all bundled)",
+        help="comma-separated suites (ncap, near, benign, vru, junction, benign-vru, all, demo), families or cases "
+        "(default: all bundled)",
     )
     add_seed_flag(p, "scenery/appearance/traffic seed of every case")
     p.add_argument("--markdown", action="store_true", help="print the table as Markdown (as in the README)")

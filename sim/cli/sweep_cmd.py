@@ -24,7 +24,8 @@ def add_parser(sub) -> argparse.ArgumentParser:
         nargs="+",
         required=True,
         metavar="NAME",
-        help="suites (`bittc scenarios --suites`: ncap, near, benign, all, demo), bundled names or YAML files",
+        help="suites (`bittc scenarios --suites`: ncap, near, benign, vru, junction, benign-vru, all, demo), "
+        "bundled names or YAML files",
     )
     p.add_argument(
         "--controllers",
