@@ -112,8 +112,10 @@ class Calibration:
 
 @dataclass(frozen=True)
 class Observation:
-    """What a deployable controller sees in one job. With a fovea (``calibration.fovea``),
-    ``fovea_latest`` / ``fovea_prev`` are the same two captures through the magnified view."""
+    """What a deployable controller sees in one job: the pair, its own speed and yaw rate
+    (what a car's wheel-speed and yaw-rate sensors give) and its calibration. With a fovea
+    (``calibration.fovea``), ``fovea_latest`` / ``fovea_prev`` are the same two captures
+    through the magnified view."""
 
     t_s: float  # capture time of the latest frame [s]
     ego_speed_mps: float  # the ego's speed at that capture [m/s]
@@ -123,6 +125,7 @@ class Observation:
     calibration: Calibration | None = None
     fovea_latest: np.ndarray | None = None  # (H, W, 3) uint8 RGB through the fovea; None without one
     fovea_prev: np.ndarray | None = None
+    ego_yaw_rate_radps: float = 0.0  # [rad/s] + turning left, from the car's yaw-rate sensor at the capture
 
     def pair(self, view: str) -> tuple[np.ndarray | None, np.ndarray | None]:
         """(prev, latest) images of view 'wide' or 'fovea'."""

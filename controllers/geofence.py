@@ -83,141 +83,27 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field
 
-import cv2
 import numpy as np
 
-from bittc_core.errors import ConfigError
 from controllers.base import BrakeCommand, Calibration, Controller, GeofenceView, Observation
-from controllers.road import corridor_columns, ground_ttc_per_row, static_depth_m
-from controllers.stages import StageConfig, StagedBrake
-
-DEFAULT_TAU_RANGE_S = (0.8, 2.8)  # [s] camera-plane TTC spanned by default_thresholds
-MAX_THRESHOLDS = 64  # thresholds per job: the one bound of K (CLI, sweeps, the controller)
-MAX_FRAME_STRIDE = 10  # [frames] the one bound of the frame stride
-DEFAULT_FRAME_STRIDE = 3  # [frames] the controller's and the open-loop evaluation's pair stride
-
-
-def frame_stride_ok(frame_stride) -> bool:
-    return (
-        not isinstance(frame_stride, bool) and isinstance(frame_stride, int) and 1 <= frame_stride <= MAX_FRAME_STRIDE
-    )
-
-
-def check_frame_stride(frame_stride) -> int:
-    """An integer stride in [1, MAX_FRAME_STRIDE]; anything else is refused by value."""
-    if not frame_stride_ok(frame_stride):
-        raise ConfigError(f"frame stride {frame_stride!r}: must be an integer in [1, {MAX_FRAME_STRIDE}]")
-    return frame_stride
-
-
-#: [s] with a fovea, fences below this run on the wide view only (the 1.5 s fence of K = 1 stays in both)
-DEFAULT_FOVEA_FENCES_FROM_S = 1.4
-
-
-def default_thresholds(num_alphas: int) -> tuple[float, ...]:
-    """K thresholds [s], uniform in log tau over DEFAULT_TAU_RANGE_S (K = 1: the geometric mean)."""
-    if isinstance(num_alphas, bool) or not isinstance(num_alphas, int) or not 1 <= num_alphas <= MAX_THRESHOLDS:
-        raise ConfigError(f"number of thresholds K = {num_alphas!r}: must be an integer in [1, {MAX_THRESHOLDS}]")
-    lo, hi = (math.log(t) for t in DEFAULT_TAU_RANGE_S)
-    if num_alphas == 1:
-        return (round(math.exp((lo + hi) / 2), 4),)
-    return tuple(round(math.exp(lo + (hi - lo) * i / (num_alphas - 1)), 4) for i in range(num_alphas))
-
-
-def check_thresholds(thresholds_s) -> tuple[float, ...]:
-    """Finite, > 0, no duplicates, 1..MAX_THRESHOLDS of them; any order."""
-    try:
-        thr = tuple(float(t) for t in thresholds_s)
-    except (TypeError, ValueError):
-        raise ConfigError(f"thresholds {thresholds_s!r}: expected a list of numbers [s]") from None
-    if not 1 <= len(thr) <= MAX_THRESHOLDS:
-        raise ConfigError(f"thresholds {list(thr)}: give 1 to {MAX_THRESHOLDS} values [s]")
-    for t in thr:
-        if not math.isfinite(t) or t <= 0:
-            raise ConfigError(f"threshold {t!r} s: thresholds must be finite and > 0")
-    dup = sorted({t for t in thr if thr.count(t) > 1})
-    if dup:
-        raise ConfigError(f"threshold {dup[0]:g} s is given twice")
-    return thr
-
-
-@dataclass(frozen=True)
-class GeofenceConfig:
-    thresholds_s: tuple[float, ...] = field(default_factory=lambda: default_thresholds(4))  # [s] camera plane
-    stages: StageConfig = field(default_factory=StageConfig)  # bumper-to-bumper TTC stages
-    prob_inside: float = 0.5  # [-] a pixel is inside a fence above this probability
-    ground_margin: float = 1.25  # [-] count rows with tau_ground > margin * tau_i
-    corridor_margin_m: float = 0.25  # [m] beyond the ego's half width, each side
-    min_region_px: int = 8  # [px] smallest connected in-path region
-    min_face_m2: float = 0.3  # [m^2] smallest face an obstacle shows at the fence's depth
-    contact_px: int = 2  # [px] a region's bottom lies at most this far above the lowest counted row
-    nested: bool = True  # a fence's evidence counts only with evidence in a larger fence too
-    persistence_frames: int = 2  # [jobs] consecutive jobs before a fence fires
-    release_frames: int = 3  # [jobs] without any fence firing before braking is released
-    min_speed_mps: float = 1.0  # [m/s] below this: no warning, no braking
-    frame_stride: int = DEFAULT_FRAME_STRIDE  # [frames] the pair is (k - stride, k): 3x the motion per pair
-    fovea_fences_from_s: float = DEFAULT_FOVEA_FENCES_FROM_S  # [s] with a fovea: fences below run on the wide view only
-
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "thresholds_s", check_thresholds(self.thresholds_s))
-        checks = {
-            "prob_inside": 0 < self.prob_inside < 1,
-            "ground_margin": self.ground_margin >= 1,
-            "corridor_margin_m": self.corridor_margin_m >= 0,
-            "min_region_px": self.min_region_px >= 1,
-            "contact_px": self.contact_px >= 0,
-            "min_face_m2": self.min_face_m2 >= 0,
-            "persistence_frames": self.persistence_frames >= 1,
-            "release_frames": self.release_frames >= 1,
-            "min_speed_mps": self.min_speed_mps >= 0,
-            "frame_stride": frame_stride_ok(self.frame_stride),
-            "fovea_fences_from_s": math.isfinite(self.fovea_fences_from_s) and self.fovea_fences_from_s >= 0,
-        }
-        for name, ok in checks.items():
-            if not ok:
-                raise ConfigError(f"GeofenceConfig.{name} = {getattr(self, name)!r} is out of range")
-
-    def fences(self, views) -> dict[str, np.ndarray]:
-        """view -> indices into the sorted thresholds evaluated on it: every fence on the
-        wide view, those from ``fovea_fences_from_s`` on on the fovea (at least the largest)."""
-        thr = np.sort(np.asarray(self.thresholds_s, dtype=np.float64))
-        out = {"wide": np.arange(len(thr))}
-        if "fovea" in views:
-            out["fovea"] = np.flatnonzero(thr >= min(self.fovea_fences_from_s, thr[-1]) - 1e-9)
-        return out
-
-
-def estimator_thresholds(estimator, thresholds_s, frame_dt_s: float, frame_stride: int = 1) -> np.ndarray:
-    """Thresholds [s] for a pair ``frame_stride * frame_dt_s`` apart -> the same
-    eta = tau / (tau + pair interval) as thresholds in the estimator's own time base
-    (tau * dt_est / pair interval); refused when outside the estimator's trained range."""
-    pair_dt_s = frame_dt_s * frame_stride
-    thr = np.asarray(thresholds_s, dtype=np.float64)
-    thr_est = thr * estimator.dt_s / pair_dt_s
-    lo, hi = estimator.tau_range_s
-    for t, t_est in zip(thr, thr_est):
-        if not lo * (1 - 1e-6) <= t_est <= hi * (1 + 1e-6):
-            raise ConfigError(
-                f"frame interval {pair_dt_s:g} s ({frame_dt_s:g} s x stride {frame_stride}): threshold {t:g} s asks "
-                f"the estimator for {t_est:g} s at its trained {estimator.dt_s:g} s, outside its range "
-                f"[{lo:g}, {hi:g}] s"
-            )
-    return thr_est
-
-
-def standing_regions(mask: np.ndarray, lowest_row: int, contact_px: int) -> tuple[int, np.ndarray]:
-    """8-connected regions of a (H, W) bool mask whose bottom row is at least
-    ``lowest_row - contact_px`` -> (pixels of the largest, (H, W) bool mask of them all)."""
-    if not mask.any():
-        return 0, np.zeros_like(mask)
-    n, labels, stats, _ = cv2.connectedComponentsWithStats(mask.astype(np.uint8), connectivity=8)
-    bottom = stats[1:, cv2.CC_STAT_TOP] + stats[1:, cv2.CC_STAT_HEIGHT] - 1
-    keep = np.flatnonzero(bottom >= lowest_row - contact_px) + 1
-    if keep.size == 0:
-        return 0, np.zeros_like(mask)
-    return int(stats[keep, cv2.CC_STAT_AREA].max()), np.isin(labels, keep)
+from controllers.evidence import corridor_mask, counted_pixels, fenced_blobs, ground_ttc_map, standing_regions
+from controllers.geofence_config import (  # noqa: F401  (re-exported: the controller's settings)
+    DEFAULT_FOVEA_FENCES_FROM_S,
+    DEFAULT_FRAME_STRIDE,
+    DEFAULT_TAU_RANGE_S,
+    MAX_FRAME_STRIDE,
+    MAX_THRESHOLDS,
+    GeofenceConfig,
+    check_frame_stride,
+    check_thresholds,
+    default_thresholds,
+    estimator_thresholds,
+    frame_stride_ok,
+)
+from controllers.road import static_depth_m
+from controllers.stages import StagedBrake
+from controllers.tracker import BlobTracker, Odometry
 
 
 def nearest_log(values: np.ndarray, target: float) -> int:
@@ -269,38 +155,61 @@ class GeofenceController(Controller):
             if hasattr(est, "reset"):
                 est.reset()
         self._stages.reset()
+        self._trackers = {v: BlobTracker(self.cfg.tracker, self._cals[v]) for v in self._fences}
+        self._odometry = Odometry()
         self._streak = {v: np.zeros(len(f), dtype=np.int64) for v, f in self._fences.items()}
         self._quiet = self.cfg.release_frames  # nothing to hold at the start
         self._last = BrakeCommand()
 
     def _evidence(
-        self, maps: np.ndarray, thr: np.ndarray, cal: Calibration, speed_mps: float
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Sorted (K, H, W) maps of fences ``thr`` [s] in the view of ``cal`` -> (in-path region
-        size per fence [px], counted mask, corridor mask)."""
-        c = self.cfg
-        tau_ground = ground_ttc_per_row(cal, speed_mps)
+        self, maps: np.ndarray, thr: np.ndarray, view: str, speed_mps: float, yaw_rate: float, t_s: float
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+        """Sorted (K, H, W) maps of fences ``thr`` [s] in ``view`` -> (in-path region size per
+        fence [px], counted mask, corridor mask, regions predicted into the path)."""
+        c, cal = self.cfg, self._cals[view]
+        tau_ground = ground_ttc_map(cal, speed_mps, yaw_rate)
+        curvature = yaw_rate / speed_mps if speed_mps > c.min_speed_mps else 0.0
         half_w = cal.ego_width_m / 2 + c.corridor_margin_m
         counted = np.zeros(maps.shape[1:], dtype=bool)
         corridor = np.zeros(maps.shape[1:], dtype=bool)
         sizes = np.zeros(len(thr), dtype=np.int64)
-        below = np.append(tau_ground[1:], tau_ground[-1])  # the ground one row lower
+        bands = [counted_pixels(tau_ground, tau, c.ground_margin) for tau in thr]
+        predicted = self._predicted(maps, thr, bands, view, speed_mps, yaw_rate, t_s)
         for i, tau in enumerate(thr):
-            rows = (tau_ground > c.ground_margin * tau) & (below > c.ground_margin * tau)
-            if not rows.any():
+            if not bands[i].any():
                 continue
             depth = static_depth_m(cal, speed_mps, tau)
-            u0, u1 = corridor_columns(cal, half_w, depth) if depth > 1e-6 else (0, cal.width_px - 1)
-            region = np.zeros_like(counted)
-            region[rows, u0 : u1 + 1] = True
-            lowest = int(np.flatnonzero(rows).max())
-            area, standing = standing_regions((maps[i] > c.prob_inside) & region, lowest, c.contact_px)
+            region = corridor_mask(cal, bands[i], half_w, depth, curvature)
+            lowest = int(np.flatnonzero(bands[i].any(axis=1)).max())
+            inside = maps[i] > c.prob_inside
+            area, standing = standing_regions(inside & region, lowest, c.contact_px)
             need = max(c.min_region_px, cal.fx_px * cal.fy_px * c.min_face_m2 / depth**2 if depth > 1e-6 else 0.0)
+            ahead = predicted & inside & bands[i]
+            if ahead.sum() > area:
+                area, standing = int(ahead.sum()), ahead
             if area >= need:
                 sizes[i] = area
                 counted |= standing
             corridor |= region
-        return sizes, counted, corridor
+        return sizes, counted, corridor, int(predicted.any())
+
+    def _predicted(self, maps, thr, bands, view: str, speed_mps: float, yaw_rate: float, t_s: float) -> np.ndarray:
+        """(H, W) bool: the regions of the largest fence, across the whole view, that the
+        tracker predicts into the ego's path (``controllers.tracker``)."""
+        c, cal = self.cfg, self._cals[view]
+        out = np.zeros(maps.shape[1:], dtype=bool)
+        if not c.tracker.enabled or not bands[-1].any():
+            return out
+        depth = static_depth_m(cal, speed_mps, thr[-1])
+        need = max(c.min_region_px, cal.fx_px * cal.fy_px * c.min_face_m2 / depth**2 if depth > 1e-6 else 0.0)
+        lowest = int(np.flatnonzero(bands[-1].any(axis=1)).max())
+        inside = (maps[-1] > c.prob_inside) & bands[-1]
+        blobs = fenced_blobs(inside, maps, thr, c.prob_inside, lowest, c.contact_px, need)
+        tracker = self._trackers[view]
+        for blob, track in zip(blobs, tracker.update(t_s, self._pose, speed_mps, blobs)):
+            if tracker.in_path(track, t_s, self._pose, speed_mps, yaw_rate):
+                out |= blob.mask
+        return out
 
     def _fired(self, view: str, sizes: np.ndarray) -> np.ndarray:
         """In-path region sizes of a view's fences -> which fences fire (nested, persistent)."""
@@ -315,6 +224,8 @@ class GeofenceController(Controller):
         if self.cal is None:
             raise RuntimeError("call reset(calibration) before act()")
         c, s = self.cfg, float(obs.ego_speed_mps)
+        yaw = float(obs.ego_yaw_rate_radps)
+        self._pose = self._odometry.update(obs.t_s, s, yaw)
         est_ms = 0.0
         tel: dict = {}
         views: dict[str, GeofenceView] = {}
@@ -327,7 +238,8 @@ class GeofenceController(Controller):
             t0 = time.perf_counter()
             maps = self._estimators[v].geofence(prev, latest, self._thr_est[idx])
             est_ms += (time.perf_counter() - t0) * 1e3
-            sizes, counted, corridor = self._evidence(maps, thr, self._cals[v], s)
+            sizes, counted, corridor, n_pred = self._evidence(maps, thr, v, s, yaw, obs.t_s)
+            tel[f"predicted_{v}"] = n_pred
             fired = self._fired(v, sizes)
             if fired.any():
                 fired_at[v] = float(thr[np.argmax(fired)])

@@ -73,6 +73,7 @@ class FrameRecord:
     decided: BrakeCommand | None = None  # its job's command
     work: JobWork | None = None  # what its job computed (what a profile charges)
     fence_cover: dict = field(default_factory=dict)  # view -> threshold '<s>' -> share of the critical actor inside
+    ego_yaw_rate_radps: float = 0.0  # [rad/s] + left, as the car's yaw-rate sensor reads it
 
 
 class ClosedLoop:
@@ -155,6 +156,7 @@ class ClosedLoop:
             self.calibration,
             fovea[0].rgb if fovea[0] is not None else None,
             fovea[1].rgb if fovea[1] is not None else None,
+            rec.ego_yaw_rate_radps,
         )
 
     def truth_at(self, job: Job) -> StepTruth:
@@ -275,6 +277,7 @@ class ClosedLoop:
             float(sim.ego.current_accel_mps2),
             self.truth,
             self.queue.active,
+            ego_yaw_rate_radps=float(sim.ego.yaw_rate_radps),
         )
         self.records.append(rec)
         self._frames[rec.index] = frame

@@ -10,26 +10,39 @@ import numpy as np
 from sim.camera import Pinhole
 from sim.random_scene_draw import SceneDraw
 from sim.stepping import capture_pose, step_traffic
+from sim.vru import part_poses
 from sim.world import World
 
 
-def render_frames(rng, world: World, hw_road, ego, actors, scene: SceneDraw, clip_length, n_sub, sim_dt, view: Pinhole):
-    """-> (images, (render, cam_T_world, poses) per frame, the per-frame state records), seen through ``view``."""
+def render_frames(
+    rng, world: World, hw_road, ego, actors, scene: SceneDraw, clip_length, n_sub, sim_dt, view: Pinhole, vrus=()
+):
+    """-> (images, (render, cam_T_world, poses, part poses) per frame, the per-frame state records),
+    seen through ``view``; ``vrus``: road users (``sim.random_vrus.place_vrus``), stepped beside
+    the traffic, each part posed (part id -> world_T_part)."""
     images, frames, states = [], [], []
     t = 0.0
     for k in range(clip_length):
         if k > 0:
             for _ in range(n_sub):
                 step_traffic(hw_road, ego, [veh for _, _, veh, _ in actors], scene.ego_decel, t, sim_dt)
+                for v in vrus:
+                    v[2].step(sim_dt)
                 t += sim_dt
         poses = {inst: veh.world_pose() for inst, _, veh, _ in actors}
         for inst, pose in poses.items():
             world.set_vehicle_pose(inst, *pose)
+        part_T = {}
+        for inst, spec, walker, _, part_ids, gait_m in vrus:
+            poses[inst] = walker.world_pose()
+            Ts = part_poses(spec, poses[inst], walker.travelled_m + gait_m)
+            world.set_part_poses(inst, Ts)
+            part_T.update(zip(part_ids, Ts))
         ex, ey, eh = ego.world_pose()
         cam_T_world = capture_pose(scene.camera, rng, (ex, ey, eh))
         r = world.render(cam_T_world, pinhole=view)
         images.append(r.rgb)
-        frames.append((r, cam_T_world, poses))
+        frames.append((r, cam_T_world, poses, part_T))
         states.append(
             {
                 "t_s": round(t, 6),
@@ -43,14 +56,14 @@ def render_frames(rng, world: World, hw_road, ego, actors, scene: SceneDraw, cli
                         "heading_rad": poses[inst][2],
                         "speed_mps": float(veh.speed),
                     }
-                    for inst, _, veh, _ in actors
+                    for inst, _, veh, _ in [*actors, *(v[:4] for v in vrus)]
                 ],
             }
         )
     return images, frames, states
 
 
-def clip_meta(sample_seed: int, scene: SceneDraw, view: Pinhole, actors, states) -> dict:
+def clip_meta(sample_seed: int, scene: SceneDraw, view: Pinhole, actors, states, vrus=()) -> dict:
     camera = scene.camera
     fx, fy, cx, cy = view.intrinsics()
     cam = asdict(camera)
@@ -80,6 +93,10 @@ def clip_meta(sample_seed: int, scene: SceneDraw, view: Pinhole, actors, states)
                 "motion": motion,
             }
             for inst, spec, _, motion in actors
+        ]
+        + [
+            {"instance": inst, "kind": spec.kind, "class": spec.cls, "height_m": spec.height_m, "motion": motion}
+            for inst, spec, _, motion, _, _ in vrus
         ],
         "frames": states,
     }

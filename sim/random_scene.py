@@ -29,6 +29,7 @@ from sim.random_actors import (
 )
 from sim.random_clip_frames import clip_meta, render_frames
 from sim.random_scene_draw import AHEAD_EGO_SPEED_MPS, EGO_MAX_SPEED_MPS, draw_scene, random_camera, random_road
+from sim.random_vrus import place_vrus, vru_scene
 from sim.stepping import pair_ground_truth, substeps
 from sim.textures import TextureBank
 from sim.traffic import ActuatorConfig, EgoVehicle, build_road
@@ -77,6 +78,7 @@ def render_clip(
     world: World | None = None,
     ahead_share: float = 0.0,
     fovea_share: float = 0.0,
+    vru_share: float = 0.0,
 ) -> Clip:
     """Draw a scene from ``sample_seed`` and render ``clip_length`` frames of it.
 
@@ -97,6 +99,9 @@ def render_clip(
         raise ValueError("render_clip: the world must use the given texture bank")
     rng = np.random.default_rng(sample_seed)
     scene = draw_scene(rng, base_camera, ahead_share, fovea_share)
+    with_vrus = vru_share > 0 and rng.random() < vru_share  # drawn only when asked: old datasets keep their bytes
+    if with_vrus:
+        scene = vru_scene(rng, scene)
     hw_road = build_road(scene.road, seed=sample_seed % (2**31))
     n_sub, sim_dt = substeps(scene.camera.dt_s)
     ego = EgoVehicle(hw_road, 0.0, 0.0, scene.v_ego, EGO_SIZE_M[0], EGO_SIZE_M[1], ActuatorConfig(delay_s=0.0), sim_dt)
@@ -109,15 +114,16 @@ def render_clip(
         world.reset(scene.camera, scene.road, seed=world_seed)
     try:
         actors = place_actors(rng, world, hw_road, scene)
+        vrus = place_vrus(rng, world, scene) if with_vrus else []
         view = scene.camera.fovea() if scene.fovea else scene.camera.wide()
         images, frames, states = render_frames(
-            rng, world, hw_road, ego, actors, scene, clip_length, n_sub, sim_dt, view
+            rng, world, hw_road, ego, actors, scene, clip_length, n_sub, sim_dt, view, vrus
         )
         gts = [
-            pair_ground_truth(view, r1.depth_m, r1.instance, c1, c0, p1, p0, scene.camera.dt_s)
-            for (_, c0, p0), (r1, c1, p1) in zip(frames[:-1], frames[1:])
+            pair_ground_truth(view, r1.depth_m, r1.instance, c1, c0, p1, p0, scene.camera.dt_s, r1.part, q1, q0)
+            for (_, c0, p0, q0), (r1, c1, p1, q1) in zip(frames[:-1], frames[1:])
         ]
     finally:
         if owned:
             world.close()
-    return Clip(images, gts, clip_meta(sample_seed, scene, view, actors, states))
+    return Clip(images, gts, clip_meta(sample_seed, scene, view, actors, states, vrus))

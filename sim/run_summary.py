@@ -16,6 +16,7 @@ from scenarios.spec import ScenarioCase
 from sim.fence_lag import FenceLagMeter
 from sim.latency import LatencyMode
 from sim.loop import ClosedLoop
+from sim.ncap_score import points, unavoidable_reason
 
 SUMMARY_KEYS = (
     "scenario",
@@ -46,6 +47,9 @@ SUMMARY_KEYS = (
     "actuator_delay_ms",
     "frames_processed",
     "frames_skipped",
+    "test_speed_kph",
+    "unavoidable",
+    "points",
 )
 #: per threshold [s]: the critical actor's exact camera-plane TTC when the fence first covered half of it,
 #: the fence's lag (threshold minus that TTC; the earlier cover of the views), the lag in each view, and
@@ -103,7 +107,10 @@ def summarize(
         "actuator_delay_ms": _r(sim.actuator.delay_s * 1e3, 3),
         "frames_processed": len(jobs),
         "frames_skipped": sum(r.status == "skipped" for r in loop.records),
+        "test_speed_kph": case.ego.speed_kph,
+        "unavoidable": unavoidable_reason(case),
     }
+    summary["points"] = points(summary)
     if lag is not None:
         summary["fence_cover_ttc_s"] = lag.cover_ttc()
         summary["fence_lag_s"] = lag.lag_s()

@@ -12,6 +12,7 @@ from controllers.base import Controller
 from scenarios.spec import ScenarioCase
 from sim.camera import CameraConfig
 from sim.latency import LatencyMode
+from sim.ncap_score import format_family_rows
 from sim.runner import SUMMARY_KEYS, run_case
 from sim.textures import TextureStyle
 
@@ -127,6 +128,12 @@ def format_table(summaries: list[dict], markdown: bool = False) -> str:
     avoided = sum(not s["collision"] for s in threats)
     fas = sum(s["false_alarm"] for s in benign)
     total = f"threats avoided: {avoided}/{len(threats)}   false alarms: {fas}/{len(benign)}"
+    unavoidable = [s for s in threats if s.get("unavoidable")]
+    if unavoidable:
+        total += f"   unavoidable by braking: {len(unavoidable)} ({unavoidable[0]['unavoidable']}"
+        total += f", {', '.join(s['scenario'] for s in unavoidable)})"
+    if len({s["family"] for s in summaries}) > 1:
+        total += "\n\n" + format_family_rows(summaries, markdown)
     if markdown:
         lines = ["| " + " | ".join(HEADERS.get(k, k) for k, _ in cols) + " |", "|" + "---|" * len(cols)]
         lines += ["| " + " | ".join(cell(s, k) for k, _ in cols) + " |" for s in summaries]

@@ -17,6 +17,7 @@ _FLAGS = {
     "ahead_share": "--ahead-share",
     "fovea_share": "--fovea-share",
     "realism_share": "--realism-share",
+    "vru_share": "--vru-share",
     "supersample": "--supersample",
     "ground_texture": "--ground-texture",
     "vehicle_texture": "--vehicle-texture",
@@ -85,6 +86,14 @@ def add_parser(sub) -> argparse.ArgumentParser:
         "and motion blur from the exact motion, defocus, vignetting, exposure, shot and read noise, tone curve, "
         "JPEG (default 0: clean renders, as in every dataset the shipped weights were trained on)",
     )
+    p.add_argument(
+        "--vru-share",
+        type=float,
+        default=0.0,
+        metavar="SHARE",
+        help="this share of the samples has pedestrians (adult, child) and cyclists crossing, walking or riding "
+        "along, near and far, on a road with sidewalks, ego 0-70 km/h (default 0: none, as in bittc_v1-v7)",
+    )
     p.add_argument("--workers", type=int, default=1, help="parallel worker processes or Ray tasks (default 1)")
     p.add_argument("--backend", default="local", choices=("local", "ray"), help="local (process pool, default) or ray")
     p.add_argument(
@@ -120,6 +129,7 @@ def _generate(args, h: int, w: int) -> dict:
         ahead_share=args.ahead_share,
         fovea_share=args.fovea_share,
         realism_share=args.realism_share,
+        vru_share=args.vru_share,
     )
     return generate(
         Path(args.out),

@@ -58,6 +58,7 @@ def prepare_dir(out: Path, cfg: GenerationConfig) -> None:
         old.setdefault("ahead_share", 0.0)  # and no braking cases ahead
         old.setdefault("fovea_share", 0.0)  # and no fovea scenes
         old.setdefault("realism_share", 0.0)  # and no sensor effects
+        old.setdefault("vru_share", 0.0)  # and no pedestrians or cyclists
         mine = asdict(cfg)
         for k in sorted(set(old) | set(mine)):
             if old.get(k) != mine.get(k):
@@ -71,8 +72,9 @@ def prepare_dir(out: Path, cfg: GenerationConfig) -> None:
         out.mkdir(parents=True, exist_ok=True)
         tmp = gen.with_name(".generation.yaml.tmp")
         settings = asdict(cfg)
-        if settings["realism_share"] == 0.0:  # the generation.yaml bytes of the datasets made before the option
-            del settings["realism_share"]
+        for key in ("realism_share", "vru_share"):  # the generation.yaml bytes of the datasets made before them
+            if settings[key] == 0.0:
+                del settings[key]
         tmp.write_text(yaml.safe_dump(settings, sort_keys=True))
         os.replace(tmp, gen)
     except OSError as e:

@@ -81,6 +81,7 @@ def make_sample(cfg_dict: dict, split_dir: str, split: str, index: int) -> tuple
             _WORKER["world"],
             ahead_share=cfg.ahead_share,
             fovea_share=cfg.fovea_share,
+            vru_share=cfg.vru_share,
         )
         clip = sensor_clip(clip, scene_seed(cfg, split, index), cfg.realism_share)
         write_sample(

@@ -1,0 +1,109 @@
+"""Evidence in one view's geofence maps: which fenced pixels stand on the road in the ego's
+corridor (the rules 2-4 of ``controllers.geofence``), and the fenced regions across the
+whole width that the tracker (``controllers.tracker``) follows.
+
+Convention: OpenCV camera frame (x right, y down, z forward), flat road, the camera pitched
+down by p. Turning at yaw rate w [rad/s] (+ left) at speed s, a static point at (X, Z)
+moves by dX/dt = w Z, dZ/dt = -(s cos p + w X); its camera-plane TTC is
+Z / (s cos p + w X), and the ego's path bends to X_path(Z) = -k Z^2 / 2 with the
+curvature k = w / s. At w = 0 both are the straight-road rules of ``controllers.road``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from controllers.base import Calibration
+from controllers.road import ground_depth_per_row
+
+
+def standing_regions(mask: np.ndarray, lowest_row: int, contact_px: int) -> tuple[int, np.ndarray]:
+    """8-connected regions of a (H, W) bool mask whose bottom row is at least
+    ``lowest_row - contact_px`` -> (pixels of the largest, (H, W) bool mask of them all)."""
+    if not mask.any():
+        return 0, np.zeros_like(mask)
+    n, labels, stats, _ = cv2.connectedComponentsWithStats(mask.astype(np.uint8), connectivity=8)
+    bottom = stats[1:, cv2.CC_STAT_TOP] + stats[1:, cv2.CC_STAT_HEIGHT] - 1
+    keep = np.flatnonzero(bottom >= lowest_row - contact_px) + 1
+    if keep.size == 0:
+        return 0, np.zeros_like(mask)
+    return int(stats[keep, cv2.CC_STAT_AREA].max()), np.isin(labels, keep)
+
+
+def ground_ttc_map(cal: Calibration, speed_mps: float, yaw_rate_radps: float = 0.0) -> np.ndarray:
+    """(H, W) camera-plane TTC [s] of the static ground seen at each pixel (+inf where it
+    does not approach: above the horizon, at standstill)."""
+    z = ground_depth_per_row(cal)[:, None]
+    closing = speed_mps * math.cos(math.radians(cal.pitch_deg))
+    if yaw_rate_radps == 0.0:
+        rate = np.full((1, cal.width_px), closing)
+    else:
+        x_over_z = (np.arange(cal.width_px, dtype=np.float64) - cal.cx_px) / cal.fx_px
+        rate = closing + yaw_rate_radps * np.where(np.isfinite(z), z, 0.0) * x_over_z[None, :]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where((rate > 1e-6) & np.isfinite(z), z / np.maximum(rate, 1e-12), np.inf)
+
+
+def counted_pixels(tau_ground: np.ndarray, tau_s: float, ground_margin: float) -> np.ndarray:
+    """(H, W) bool: pixels where fence ``tau_s`` can be judged: the ground there and one row
+    below lies clearly outside the fence (TTC > ``ground_margin`` x tau)."""
+    below = np.vstack([tau_ground[1:], tau_ground[-1:]])  # the ground one row lower
+    return (tau_ground > ground_margin * tau_s) & (below > ground_margin * tau_s)
+
+
+def corridor_mask(cal: Calibration, counted: np.ndarray, half_w_m: float, depth_m: float, curvature: float):
+    """(H, W) bool: the counted pixels in the columns of the ego's corridor at ``depth_m``
+    (its width plus margins, bent along the path of curvature ``curvature`` [1/m])."""
+    out = np.zeros_like(counted)
+    if depth_m <= 1e-6:
+        out[:] = counted
+        return out
+    centre = cal.cx_px - cal.fx_px * curvature * depth_m / 2
+    half_px = cal.fx_px * half_w_m / depth_m
+    u0 = max(0, int(math.ceil(centre - half_px)))
+    u1 = min(cal.width_px - 1, int(math.floor(centre + half_px)))
+    if u1 >= u0:
+        out[:, u0 : u1 + 1] = counted[:, u0 : u1 + 1]
+    return out
+
+
+@dataclass(frozen=True)
+class Blob:
+    """A fenced region standing on the road, anywhere across the view: its pixels, column
+    extent [px] and the smallest fence threshold [s] that holds most of it."""
+
+    mask: np.ndarray
+    u_left: float
+    u_right: float
+    tau_bound_s: float
+
+
+def fenced_blobs(
+    inside: np.ndarray,
+    maps: np.ndarray,
+    thr: np.ndarray,
+    prob_inside: float,
+    lowest: int,
+    contact_px: int,
+    need_px: float,
+) -> list[Blob]:
+    """Standing regions of ``inside`` (the largest fence's counted inside pixels) of at least
+    ``need_px`` pixels, each with the smallest fence of ``thr`` that holds half of it."""
+    if not inside.any():
+        return []
+    n, labels, stats, _ = cv2.connectedComponentsWithStats(inside.astype(np.uint8), connectivity=8)
+    out = []
+    for k in range(1, n):
+        top, h, area = stats[k, cv2.CC_STAT_TOP], stats[k, cv2.CC_STAT_HEIGHT], stats[k, cv2.CC_STAT_AREA]
+        if top + h - 1 < lowest - contact_px or area < need_px:
+            continue
+        m = labels == k
+        shares = [(maps[i][m] > prob_inside).mean() for i in range(len(thr))]
+        i_min = next((i for i, sh in enumerate(shares) if sh >= 0.5), len(thr) - 1)
+        left = stats[k, cv2.CC_STAT_LEFT]
+        out.append(Blob(m, float(left), float(left + stats[k, cv2.CC_STAT_WIDTH] - 1), float(thr[i_min])))
+    return out

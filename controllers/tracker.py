@@ -1,0 +1,213 @@
+"""Follow fenced regions over jobs and predict which will enter the ego's path.
+
+A pedestrian crossing ahead is inside the 1.6 s fence long before it is in the ego's
+corridor, and many walk clear. The tracker decides from what the car has: the fenced
+regions of each job (``controllers.evidence.Blob``), the ego's speed and yaw rate, and
+the calibration.
+
+Per job and view:
+
+1. **Associate**: each region goes to the track whose last region's column centre is
+   nearest, within ``gate_frac`` of the wider of the two (at least ``min_gate_px``);
+   the others start tracks. A track without a region for ``max_missed`` jobs ends.
+2. **Time and depth**: a region inside fence tau_i at t_j reaches the camera plane by
+   t_j + tau_i (if it closes at the ego's speed: a static or crossing target). A track's
+   contact time t0 is the earliest such bound over its history, and its depth at t_k is
+   the static depth of the TTC left then, Z_k = s cos p (t0 - t_k) (at least
+   ``min_ttc_s``). Every observation is re-placed with the current t0, so a tighter
+   bound rescales the whole history at once instead of making a jump in it.
+3. **Ground motion**: each region's inner edge (the column nearest the image centre: a
+   region at the image's border is cut there, its outer edge and centre move with the
+   cut) at Z_k, moved into one odometry frame by dead reckoning from the ego's speed and
+   yaw rate, gives the target's velocity over the ground by a least-squares line over
+   the last ``window`` jobs. A region across the centre is in the corridor now: the
+   corridor rule of ``controllers.geofence`` judges it.
+4. **Predict**: the ego keeps its speed and yaw rate; the target keeps its velocity.
+   Sampled every ``step_s`` up to the track's TTC plus ``horizon_pad_s``: does the inner
+   edge (``target_half_length_m`` along the ego) enter the ego's footprint widened by
+   ``margin_m`` each side? Tracks with fewer than ``min_hits`` regions, or a ground
+   speed above ``max_speed_mps`` (a bad association), predict nothing.
+
+Odometry: x [m] forward and y [m] left of the ego's footprint centre at the run's
+start, heading psi [rad]. Camera frame to ego frame: forward = Z + mount_forward_m,
+left = -X.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from controllers.base import Calibration
+from controllers.evidence import Blob
+
+
+@dataclass(frozen=True)
+class TrackerConfig:
+    enabled: bool = True  # False: only the corridor now counts (the straight-road controller)
+    gate_frac: float = 0.6  # [-] association gate, share of the wider region's width
+    min_gate_px: float = 4.0  # [px]
+    min_hits: int = 3  # [jobs] regions before a track predicts
+    window: int = 6  # [jobs] regions in the motion fit
+    max_missed: int = 2  # [jobs]
+    margin_m: float = 0.25  # [m] beyond the ego's half width, each side
+    target_half_length_m: float = 0.4  # [m] a target's half extent along the ego's heading
+    horizon_pad_s: float = 0.3  # [s] predict this far past the track's TTC
+    step_s: float = 0.05  # [s]
+    min_ttc_s: float = 0.2  # [s] the smallest TTC a depth is placed at
+    max_speed_mps: float = 15.0  # [m/s] a faster fitted ground speed is a bad association
+
+    def __post_init__(self) -> None:
+        ok = (
+            self.gate_frac > 0
+            and self.min_gate_px >= 0
+            and self.min_hits >= 2
+            and self.window >= self.min_hits
+            and self.max_missed >= 0
+            and self.margin_m >= 0
+            and self.target_half_length_m >= 0
+            and self.horizon_pad_s >= 0
+            and self.step_s > 0
+            and self.min_ttc_s > 0
+            and self.max_speed_mps > 0
+        )
+        if not ok:
+            raise ValueError(f"TrackerConfig out of range: {self}")
+
+
+@dataclass
+class _Obs:
+    t_s: float
+    u_left: float
+    u_right: float
+    tau_bound_s: float
+    speed_mps: float
+    pose: tuple[float, float, float]  # odometry (x, y, psi) at t
+
+
+@dataclass
+class Track:
+    obs: list[_Obs] = field(default_factory=list)
+    missed: int = 0
+
+    @property
+    def centre_px(self) -> float:
+        return 0.5 * (self.obs[-1].u_left + self.obs[-1].u_right)
+
+    @property
+    def width_px(self) -> float:
+        return self.obs[-1].u_right - self.obs[-1].u_left + 1
+
+    def contact_time_s(self) -> float:
+        """t0 [s]: the earliest time by which the track reaches the camera plane."""
+        return min(o.t_s + o.tau_bound_s for o in self.obs)
+
+
+class Odometry:
+    """Dead reckoning of the ego's planar pose from its speed and yaw rate."""
+
+    def __init__(self) -> None:
+        self.pose = (0.0, 0.0, 0.0)
+        self.t_s: float | None = None
+
+    def update(self, t_s: float, speed_mps: float, yaw_rate_radps: float) -> tuple[float, float, float]:
+        if self.t_s is not None and t_s > self.t_s:
+            dt = t_s - self.t_s
+            x, y, psi = self.pose
+            mid = psi + 0.5 * yaw_rate_radps * dt
+            self.pose = (
+                x + speed_mps * dt * math.cos(mid),
+                y + speed_mps * dt * math.sin(mid),
+                psi + yaw_rate_radps * dt,
+            )
+        self.t_s = t_s
+        return self.pose
+
+
+class BlobTracker:
+    """The tracks of one view (see the module docstring)."""
+
+    def __init__(self, cfg: TrackerConfig, cal: Calibration) -> None:
+        self.cfg, self.cal = cfg, cal
+        self.tracks: list[Track] = []
+
+    def update(self, t_s: float, pose, speed_mps: float, blobs: list[Blob]) -> list[Track]:
+        """Associate this job's regions; -> the track of each region, in order."""
+        c = self.cfg
+        free = list(range(len(self.tracks)))
+        out = []
+        for b in blobs:
+            centre, width = 0.5 * (b.u_left + b.u_right), b.u_right - b.u_left + 1
+            best, best_d = None, math.inf
+            for i in free:
+                tr = self.tracks[i]
+                d = abs(tr.centre_px - centre)
+                if d <= max(c.gate_frac * max(width, tr.width_px), c.min_gate_px) and d < best_d:
+                    best, best_d = i, d
+            if best is None:
+                self.tracks.append(Track())
+                best = len(self.tracks) - 1
+            else:
+                free.remove(best)
+            tr = self.tracks[best]
+            tr.obs.append(_Obs(t_s, b.u_left, b.u_right, b.tau_bound_s, speed_mps, pose))
+            del tr.obs[: -c.window]
+            tr.missed = 0
+            out.append(tr)
+        for i in free:
+            self.tracks[i].missed += 1
+        self.tracks = [t for t in self.tracks if t.missed <= c.max_missed]
+        return out
+
+    def _ground_points(self, tr: Track, t0: float) -> tuple[np.ndarray, np.ndarray] | None:
+        """(times (N,), odometry points (N, 2) of the inner edge); None when a region lies
+        across the image centre."""
+        cal, c = self.cal, self.cfg
+        cos_p = math.cos(math.radians(cal.pitch_deg))
+        ts, pts = [], []
+        for o in tr.obs:
+            if o.u_left <= cal.cx_px <= o.u_right:
+                return None
+            inner = o.u_right if o.u_right < cal.cx_px else o.u_left
+            z = max(o.speed_mps * cos_p * max(t0 - o.t_s, c.min_ttc_s), 0.5)
+            fwd, left = z + cal.mount_forward_m, -(inner - cal.cx_px) / cal.fx_px * z
+            x, y, psi = o.pose
+            pts.append((x + fwd * math.cos(psi) - left * math.sin(psi), y + fwd * math.sin(psi) + left * math.cos(psi)))
+            ts.append(o.t_s)
+        return np.asarray(ts), np.asarray(pts)
+
+    def in_path(self, tr: Track, t_s: float, pose, speed_mps: float, yaw_rate_radps: float) -> bool:
+        """Whether track ``tr`` is predicted to enter the ego's widened footprint within its TTC."""
+        c, cal = self.cfg, self.cal
+        if len(tr.obs) < c.min_hits or speed_mps <= 0:
+            return False
+        t0 = tr.contact_time_s()
+        placed = self._ground_points(tr, t0)
+        if placed is None:
+            return False
+        ts, pts = placed
+        tm = ts.mean()
+        A = np.stack([np.ones_like(ts), ts - tm], axis=1)
+        coef, *_ = np.linalg.lstsq(A, pts, rcond=None)
+        vel = coef[1]
+        if float(np.hypot(*vel)) > c.max_speed_mps:
+            return False
+        horizon = max(t0 - t_s, 0.0) + c.horizon_pad_s
+        times = np.arange(0.0, horizon + 1e-9, c.step_s)
+        target = coef[0] + np.outer(times + (t_s - tm), vel)  # (N, 2)
+        x, y, psi = pose
+        heading = psi + yaw_rate_radps * times
+        if abs(yaw_rate_radps) > 1e-6:
+            r = speed_mps / yaw_rate_radps
+            ex = x + r * (np.sin(heading) - math.sin(psi))
+            ey = y - r * (np.cos(heading) - math.cos(psi))
+        else:
+            ex, ey = x + speed_mps * times * math.cos(psi), y + speed_mps * times * math.sin(psi)
+        dx, dy = target[:, 0] - ex, target[:, 1] - ey
+        fwd = dx * np.cos(heading) + dy * np.sin(heading)
+        left = -dx * np.sin(heading) + dy * np.cos(heading)
+        reach_l = cal.ego_length_m / 2 + c.target_half_length_m
+        reach_w = cal.ego_width_m / 2 + c.margin_m
+        return bool(np.any((np.abs(fwd) <= reach_l) & (np.abs(left) <= reach_w)))
