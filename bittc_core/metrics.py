@@ -15,6 +15,8 @@ eta_i = tau_i / (tau_i + dt_s).
 * actor_iou: like miou but only over valid pixels of vehicles (actors, instance > 0),
   moving or not, at tau = 1 and 2 s, with intersections and unions pooled over the data
   set (actors are often absent from an image) and averaged over the two classes.
+* class_iou: the actor IoU per actor class (car, pedestrian, cyclist) when ``add`` gets
+  the class map (``bittc_core.data.dataset.class_map``).
 * breakdown (where the errors are): the mIoU per threshold; the (image, threshold)
   pairs of the mIoU grouped by the share of valid pixels inside the geofence
   (``INSIDE_SHARE_EDGES``), with their mean two-class IoU and their mean inside-class IoU
@@ -38,6 +40,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from bittc_core.ttc import eta_to_tau, tau_to_eta
+
+#: actor classes of the ground truth: id -> name (0: the static world and the sky)
+ACTOR_CLASSES = {1: "car", 2: "pedestrian", 3: "cyclist"}
 
 MIOU_TAU_RANGE_S = (0.2, 2.0)
 MIOU_LEVELS = 10
@@ -120,6 +125,7 @@ class MetricAccumulator:
     miou_thresholds_s: np.ndarray = field(init=False)
     _errors: dict = field(default_factory=dict)
     _actor: dict = field(default_factory=dict)
+    _class: dict = field(default_factory=dict)  # class name -> tau -> (2, 2) counts
     _latency_ms: list = field(default_factory=list)
     _iou_by_threshold: list = field(default_factory=list)  # per image: MIOU_LEVELS ious (nan: skipped)
     _by_share: dict = field(default_factory=dict)  # label -> [[two-class iou], [inside iou], [false inside px]]
@@ -151,6 +157,7 @@ class MetricAccumulator:
         instance: np.ndarray,
         latency_ms: float | None = None,
         ego_speed_mps: float | None = None,
+        classes: np.ndarray | None = None,
     ) -> None:
         """prob: (K, H, W) geofence probabilities for ``thresholds_s``; eta_hat: (H, W) or None;
         ego_speed_mps: the ego's speed at the latest frame [m/s], None where unknown."""
@@ -192,6 +199,9 @@ class MetricAccumulator:
             self._errors[t][1] += int(valid.sum())
             if t in self._actor:
                 self._actor[t] += class_counts(pred[n + j], truth, actors)
+                for cid, name in () if classes is None else ACTOR_CLASSES.items():
+                    per = self._class.setdefault(name, {u: np.zeros((2, 2), np.int64) for u in ACTOR_TAUS_S})
+                    per[t] += class_counts(pred[n + j], truth, actors & (classes == cid))
             if t == STATIC_ERROR_TAU_S:
                 static_pred, static_truth = pred[n + j], truth
         if ego_speed_mps is not None:
@@ -225,6 +235,9 @@ class MetricAccumulator:
             "mid": mid_sum / mid_count * MID_SCALE if mid_count else nan,
             "error_rate": {f"{t:g}": (e / n if n else nan) for t, (e, n) in self._errors.items()},
             "actor_iou": {f"{t:g}": two_class_iou(c) for t, c in self._actor.items()},
+            "class_iou": {
+                name: {f"{t:g}": two_class_iou(c) for t, c in per.items()} for name, per in self._class.items()
+            },
             "latency_ms": float(np.mean(self._latency_ms)) if self._latency_ms else nan,
             "images": len(per_image),
             "breakdown": self._breakdown(),

@@ -23,8 +23,8 @@ from controllers.oracle import OracleConfig, OracleController
 REGISTRY: dict[str, str] = {
     "none": "controllers.none:NoController",
     "oracle": "controllers.oracle:OracleController",
-    "geofence": "controllers.geofence:make_geofence",
-    "flow": "controllers.geofence:make_flow",
+    "geofence": "controllers.geofence_factory:make_geofence",
+    "flow": "controllers.geofence_factory:make_flow",
 }
 #: controllers whose decisions come from an estimator's geofences (they take thresholds)
 ESTIMATOR_CONTROLLERS = ("geofence", "flow")

@@ -10,17 +10,21 @@ estimator's map p_i = p(0 < tau <= tau_i)):
 
 1. **Inside**: pixels with p_i > ``prob_inside``.
 2. **Not the road**: the static ground ahead has a finite TTC, tau_ground(row) =
-   Z(row) / (s cos p) (``controllers.road``; at 50 km/h the road within about 33 m lies
-   inside a 2.4 s fence). A pixel counts only on rows whose ground lies clearly outside
-   the fence, tau_ground(row) > ``ground_margin`` * tau_i: an obstacle standing on the
+   Z(row) / (s cos p) (``controllers.road``; turning, per pixel: ``controllers.evidence``;
+   at 50 km/h the road within about 33 m lies inside a 2.4 s fence). A pixel counts only
+   on rows whose ground lies clearly outside the fence, tau_ground(row) > ``ground_margin`` * tau_i: an obstacle standing on the
    road reaches the camera plane sooner than the road under its upper part. At
    standstill tau_ground is +inf: every inside pixel counts (a static world is at
    tau = inf and inside no fence).
-3. **In the corridor**: the ego's width plus ``corridor_margin_m`` on each side,
-   straight ahead, projected at the depth Z_i = s cos p tau_i of a static point on the
-   fence. An actor inside the fence is at most that far if it does not close faster
-   than the ego drives, so an adjacent-lane car (static, slower or same-direction) lies
-   outside these columns; an oncoming car in the next lane closes faster and could
+3. **In the corridor, or predicted into it**: the ego's width plus ``corridor_margin_m``
+   on each side, along its path (straight, or bent by its yaw rate: ``controllers.evidence``),
+   projected at the depth Z_i = s cos p tau_i of a static point on the fence. Or a fenced
+   region anywhere across the view that the tracker (``controllers.tracker``: regions
+   followed over jobs, their motion over the ground, the ego's path ahead) predicts into
+   the ego's footprint within its TTC: a pedestrian stepping out, a car crossing a
+   junction, an oncoming car the ego turns across. An actor inside the fence is at most
+   that far if it does not close faster than the ego drives, so an adjacent-lane car
+   (static, slower or same-direction) lies outside these columns; an oncoming car in the next lane closes faster and could
    enter them only when its closing speed exceeds about 2.4x the ego's (3.5 m lanes).
    A car cutting in enters the columns as it enters the lane.
 4. **Standing on the road, big enough**: an obstacle inside the fence stands on the
@@ -277,43 +281,3 @@ class GeofenceController(Controller):
         return BrakeCommand(
             cmd.decel_mps2, cmd.warning, telemetry=tel, view=views["wide"], fovea_view=views.get("fovea")
         )
-
-
-def _config(thresholds_s, frame_stride: int | None, fovea_fences_from_s: float | None = None) -> GeofenceConfig:
-    thr = tuple(thresholds_s) if thresholds_s is not None else default_thresholds(4)
-    kw = {} if frame_stride is None else {"frame_stride": frame_stride}
-    if fovea_fences_from_s is not None:
-        kw["fovea_fences_from_s"] = float(fovea_fences_from_s)
-    return GeofenceConfig(thresholds_s=thr, **kw)
-
-
-def make_geofence(
-    thresholds_s=None,
-    weights: str | None = None,
-    frame_stride: int | None = None,
-    device: str = "cpu",
-    name: str = "geofence",
-    backend: str = "torch",
-    onnx: str | None = None,
-    fovea_fences_from_s: float | None = None,
-) -> GeofenceController:
-    """The shipped network (or ``weights``) behind the geofence controller; ``backend=
-    "onnxruntime", onnx=DIR``: the same weights exported to ``DIR`` (checked against them)."""
-    from bittc_core.checkpoint import DEFAULT_WEIGHTS
-    from bittc_core.estimator import make_estimator
-
-    if backend == "onnxruntime":
-        est = make_estimator("bittc", weights=weights or DEFAULT_WEIGHTS, backend=backend, onnx=onnx)
-    else:
-        est = make_estimator("bittc", weights=weights, device=device, backend=backend, onnx=onnx)
-    return GeofenceController(est, _config(thresholds_s, frame_stride, fovea_fences_from_s), name=name)
-
-
-def make_flow(
-    thresholds_s=None, frame_stride: int | None = None, name: str = "flow", fovea_fences_from_s: float | None = None
-) -> GeofenceController:
-    """The DIS + affine-expansion baseline behind the same controller logic."""
-    from bittc_core.estimator import make_estimator
-
-    cfg = _config(thresholds_s, frame_stride, fovea_fences_from_s)
-    return GeofenceController(make_estimator("flow"), cfg, name=name)

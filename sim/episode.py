@@ -17,13 +17,13 @@ import numpy as np
 
 from scenarios.spec import ScenarioCase, VruActorSpec
 from sim import episode_contact
-from sim.actor_truth import ActorTruth, actor_truth
+from sim.actor_truth import ActorTruth
 from sim.camera import CameraConfig
-from sim.episode_actors import Actor, obstruction_poses, vehicle_start, walker_for
+from sim.episode_actors import Actor, actor_truths, obstruction_poses, vehicle_start, walker_for
 from sim.episode_placement import overlap_offset_m
 from sim.episode_records import Collision, Frame, StepTruth
+from sim.episode_sensor import through_sensor
 from sim.ground_truth import GroundTruth
-from sim.path_truth import path_truth
 from sim.stepping import capture_pose, pair_ground_truth, step_traffic, substeps
 from sim.textures import TextureStyle
 from sim.traffic import ActuatorConfig, EgoVehicle, ScriptedVehicle, TrafficVehicle, build_road
@@ -165,33 +165,8 @@ class ScenarioSim:
 
     # ------------------------------------------------------------------ state
     def actor_truths(self) -> list[ActorTruth]:
-        ego_pose = self.ego.world_pose()
-        if self.case.open_paths:  # contact from both exact futures (sim.path_truth)
-            return [
-                path_truth(
-                    a.instance,
-                    self.path,
-                    ego_pose,
-                    EGO_SIZE_M[:2],
-                    float(self.ego.speed),
-                    a.vehicle,
-                    (a.spec.length_m, a.spec.width_m),
-                    self.t_s,
-                )
-                for a in self.actors
-            ]
-        return [
-            actor_truth(
-                a.instance,
-                ego_pose,
-                EGO_SIZE_M[:2],
-                float(self.ego.speed),
-                a.vehicle.world_pose(),
-                (a.spec.length_m, a.spec.width_m),
-                a.vehicle.world_velocity(),
-            )
-            for a in self.actors
-        ]
+        """Every actor's exact truth now (``sim.episode_actors.actor_truths``)."""
+        return actor_truths(self)
 
     def truth(self) -> StepTruth:
         actors = self.actor_truths()
@@ -231,37 +206,9 @@ class ScenarioSim:
         return frame
 
     def _through_sensor(self, frame: Frame) -> Frame:
-        """Each view's image through ``self.sensor``, moved by the exact motion since the
-        previous capture (for the first, since ``_before`` it)."""
-        from sim.sensor import apply_effects
-
+        """Each view's image through ``self.sensor`` (``sim.episode_sensor``)."""
         prev, self._last_capture = self._last_capture, frame
-        if prev is None:
-            prev = self._before(frame)
-        out = {}
-        for view in ("wide", "fovea") if frame.fovea is not None else ("wide",):
-            flow = self.ground_truth(prev, frame, view).flow_px
-            out[view] = apply_effects(frame.view(view)[0], self.sensor, flow, frame.t_s - prev.t_s, self._sensor_rng)
-        fovea = replace(frame.fovea, rgb=out["fovea"]) if frame.fovea is not None else None
-        return replace(frame, image=out["wide"], fovea=fovea)
-
-    def _before(self, frame: Frame) -> Frame:
-        """The state one frame interval before ``frame`` (no image): the ego and every actor
-        moved back at their present velocities, so the first capture has a motion too."""
-        dt = self.camera.dt_s
-        vx, vy = self.ego.world_velocity()
-        shift = np.eye(4)
-        shift[:3, 3] = (vx * dt, vy * dt, 0.0)  # world_T_cam moved back by v dt
-        poses, part_T = {}, {}
-        for a in self.actors:
-            x, y, h = frame.poses[a.instance]
-            ax, ay = a.vehicle.world_velocity()
-            poses[a.instance] = (x - ax * dt, y - ay * dt, h)
-            for pid in a.part_ids:  # limbs moved back with the body, their swing kept
-                T = frame.part_poses[pid].copy()
-                T[:2, 3] -= (ax * dt, ay * dt)
-                part_T[pid] = T
-        return Frame(frame.t_s - dt, None, frame.cam_T_world @ shift, poses, part_poses=part_T)
+        return through_sensor(self, frame, prev)
 
     def ground_truth(self, prev: Frame, latest: Frame, view: str = "wide") -> GroundTruth:
         """Exact per-pixel ground truth of ``latest`` against ``prev`` in view 'wide' or 'fovea'."""

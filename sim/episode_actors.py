@@ -13,7 +13,9 @@ from dataclasses import dataclass, field
 from scenarios.paths import EgoPath, crossing_lane, meet_start
 from scenarios.spec import ActorSpec, ScenarioCase, VruActorSpec
 from scenarios.vru_spec import STOP_DECEL_MPS2, vru_placement
+from sim.actor_truth import ActorTruth, actor_truth
 from sim.episode_placement import actor_placement, overlap_offset_m
+from sim.path_truth import path_truth
 from sim.vehicles import EGO_SIZE_M, VehicleSpec
 from sim.vru import VruSpec
 from sim.walkers import Walker
@@ -89,3 +91,36 @@ def obstruction_poses(a: VruActorSpec, v_ego: float, conflict_s: float, car_m: t
     x_line = p.crossing_x_m
     half = a.footprint_m[1] / 2 + OBSTRUCTION_GAP_M + length / 2
     return [(x_line - half, y, 0.0), (x_line + half, y, 0.0)]
+
+
+def actor_truths(sim) -> list[ActorTruth]:
+    """Every actor's truth in scenario run ``sim`` (``sim.episode.ScenarioSim``): from both
+    exact futures where paths cross (``sim.path_truth``), else along the straight road
+    (``sim.actor_truth``)."""
+    ego_pose = sim.ego.world_pose()
+    if sim.case.open_paths:  # contact from both exact futures (sim.path_truth)
+        return [
+            path_truth(
+                a.instance,
+                sim.path,
+                ego_pose,
+                EGO_SIZE_M[:2],
+                float(sim.ego.speed),
+                a.vehicle,
+                (a.spec.length_m, a.spec.width_m),
+                sim.t_s,
+            )
+            for a in sim.actors
+        ]
+    return [
+        actor_truth(
+            a.instance,
+            ego_pose,
+            EGO_SIZE_M[:2],
+            float(sim.ego.speed),
+            a.vehicle.world_pose(),
+            (a.spec.length_m, a.spec.width_m),
+            a.vehicle.world_velocity(),
+        )
+        for a in sim.actors
+    ]

@@ -35,6 +35,7 @@ from torch.utils.data import Dataset
 
 from bittc_core.data.format import SPLITS, read_sample
 from bittc_core.errors import ConfigError
+from bittc_core.metrics import ACTOR_CLASSES
 
 INPATH_HALF_WIDTH_M = 1.5  # [m] |X| of the camera frame: the ego's half width plus a margin
 INPATH_MAX_DEPTH_M = 80.0  # [m] at the wide view's focal; times the zoom for a fovea sample
@@ -112,6 +113,7 @@ class TTCDataset(Dataset):
             prev, latest = (
                 np.clip(((x**gamma) * gain - 0.5) * contrast + 0.5 + bright, 0.0, 1.0) for x in (prev, latest)
             )
+        classes = class_map(inst, meta)
         lateral_m = np.abs(np.arange(W, dtype=np.float32) - K[2])[None, :] / K[0] * depth
         max_depth_m = INPATH_MAX_DEPTH_M * float(meta.get("view", {}).get("zoom", 1.0))
         inpath = (inst > 0) & valid & (lateral_m < INPATH_HALF_WIDTH_M) & (depth < max_depth_m)
@@ -123,8 +125,23 @@ class TTCDataset(Dataset):
             "flow_px": torch.from_numpy(np.ascontiguousarray(flow.transpose(2, 0, 1), np.float32)),
             "valid": torch.from_numpy(np.ascontiguousarray(valid, np.bool_)),
             "instance": torch.from_numpy(np.ascontiguousarray(inst, np.int64)),
+            "actor_class": torch.from_numpy(np.ascontiguousarray(classes, np.int64)),
             "inpath": torch.from_numpy(np.ascontiguousarray(inpath, np.bool_)),
             "dt_s": torch.tensor(float(meta["dt_s"]), dtype=torch.float32),
             "intrinsics": torch.from_numpy(K.astype(np.float32)),
             "ego_speed_mps": torch.tensor(float(meta["frames"][j + 1]["ego"]["speed_mps"]), dtype=torch.float32),
         }
+
+
+_CLASS_ID = {name: cid for cid, name in ACTOR_CLASSES.items()}
+
+
+def class_map(instance: np.ndarray, meta: dict) -> np.ndarray:
+    """(H, W) int64 actor class id per pixel (``ACTOR_CLASSES``; 0 for the static world and
+    the sky) from the instance map and the sample's actors (meta.json): a road user's
+    ``class``, every vehicle (car, GVT, van, truck) 'car' (``bittc_core.metrics.ACTOR_CLASSES``)."""
+    lut = np.zeros(max([0, *(int(a["instance"]) for a in meta.get("actors", []))]) + 1, np.int64)
+    for a in meta.get("actors", []):
+        lut[int(a["instance"])] = _CLASS_ID[a.get("class", "car")]
+    idx = np.clip(instance, 0, len(lut) - 1)
+    return np.where(instance > 0, lut[idx], 0)

@@ -204,6 +204,7 @@ def evaluate(estimator, dataset, limit: int | None, against=None) -> dict:
             s["instance"].numpy(),
             latency_ms=latency,
             ego_speed_mps=None if speed is None else float(speed),
+            classes=s["actor_class"].numpy() if "actor_class" in s else None,
         )
     result = acc.result()
     result["pairs"] = n
@@ -223,6 +224,8 @@ def format_table(r: dict) -> str:
     ]
     lines += [f"{'error rate tau=' + k + ' s':<22} {v:>10.4f}" for k, v in r["error_rate"].items()]
     lines += [f"{'actor IoU tau=' + k + ' s':<22} {v:>10.4f}" for k, v in r["actor_iou"].items()]
+    for name, per in r.get("class_iou", {}).items():
+        lines += [f"{name + ' IoU tau=' + k + ' s':<22} {v:>10.4f}" for k, v in per.items()]
     lines.append(f"{'latency ms/pair':<22} {r['latency_ms']:>10.2f}")
     if "backend_agreement" in r:
         a = r["backend_agreement"]

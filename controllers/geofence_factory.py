@@ -1,0 +1,48 @@
+"""The bundled geofence controllers, by name (``controllers.CONTROLLERS``): the shipped
+network (``geofence``) or DIS + affine expansion (``flow``) behind the same policy
+(``controllers.geofence.GeofenceController``)."""
+
+from __future__ import annotations
+
+from controllers.geofence import GeofenceController
+from controllers.geofence_config import GeofenceConfig, default_thresholds
+
+
+def _config(thresholds_s, frame_stride: int | None, fovea_fences_from_s: float | None = None) -> GeofenceConfig:
+    thr = tuple(thresholds_s) if thresholds_s is not None else default_thresholds(4)
+    kw = {} if frame_stride is None else {"frame_stride": frame_stride}
+    if fovea_fences_from_s is not None:
+        kw["fovea_fences_from_s"] = float(fovea_fences_from_s)
+    return GeofenceConfig(thresholds_s=thr, **kw)
+
+
+def make_geofence(
+    thresholds_s=None,
+    weights: str | None = None,
+    frame_stride: int | None = None,
+    device: str = "cpu",
+    name: str = "geofence",
+    backend: str = "torch",
+    onnx: str | None = None,
+    fovea_fences_from_s: float | None = None,
+) -> GeofenceController:
+    """The shipped network (or ``weights``) behind the geofence controller; ``backend=
+    "onnxruntime", onnx=DIR``: the same weights exported to ``DIR`` (checked against them)."""
+    from bittc_core.checkpoint import DEFAULT_WEIGHTS
+    from bittc_core.estimator import make_estimator
+
+    if backend == "onnxruntime":
+        est = make_estimator("bittc", weights=weights or DEFAULT_WEIGHTS, backend=backend, onnx=onnx)
+    else:
+        est = make_estimator("bittc", weights=weights, device=device, backend=backend, onnx=onnx)
+    return GeofenceController(est, _config(thresholds_s, frame_stride, fovea_fences_from_s), name=name)
+
+
+def make_flow(
+    thresholds_s=None, frame_stride: int | None = None, name: str = "flow", fovea_fences_from_s: float | None = None
+) -> GeofenceController:
+    """The DIS + affine-expansion baseline behind the same controller logic."""
+    from bittc_core.estimator import make_estimator
+
+    cfg = _config(thresholds_s, frame_stride, fovea_fences_from_s)
+    return GeofenceController(make_estimator("flow"), cfg, name=name)
