@@ -9,24 +9,25 @@ Each job, for every fence tau_i (camera-plane TTC [s] from the latest frame; the
 estimator's map p_i = p(0 < tau <= tau_i)):
 
 1. **Inside**: pixels with p_i > ``prob_inside``.
-2. **Not the road**: the static ground ahead has a finite TTC, tau_ground(row) =
-   Z(row) / (s cos p) (``controllers.road``; turning, per pixel: ``controllers.evidence``;
-   at 50 km/h the road within about 33 m lies inside a 2.4 s fence). A pixel counts only
-   on rows whose ground lies clearly outside the fence, tau_ground(row) > ``ground_margin`` * tau_i: an obstacle standing on the
-   road reaches the camera plane sooner than the road under its upper part. At
-   standstill tau_ground is +inf: every inside pixel counts (a static world is at
-   tau = inf and inside no fence).
+2. **Not the road**: the static ground ahead has a finite TTC, tau_ground(row) = Z(row)
+   / (s cos p) (``controllers.road``; turning, per pixel: ``controllers.evidence``; at
+   50 km/h the road within about 33 m lies inside a 2.4 s fence). A pixel counts only on
+   rows whose ground lies clearly outside the fence, tau_ground(row) > ``ground_margin``
+   * tau_i: an obstacle standing on the road reaches the camera plane sooner than the
+   road under its upper part. At standstill tau_ground is +inf: every inside pixel
+   counts (a static world is at tau = inf and inside no fence).
 3. **In the corridor, or predicted into it**: the ego's width plus ``corridor_margin_m``
-   on each side, along its path (straight, or bent by its yaw rate: ``controllers.evidence``),
-   projected at the depth Z_i = s cos p tau_i of a static point on the fence. Or a fenced
-   region anywhere across the view that the tracker (``controllers.tracker``: regions
-   followed over jobs, their motion over the ground, the ego's path ahead) predicts into
-   the ego's footprint within its TTC: a pedestrian stepping out, a car crossing a
-   junction, an oncoming car the ego turns across. An actor inside the fence is at most
-   that far if it does not close faster than the ego drives, so an adjacent-lane car
-   (static, slower or same-direction) lies outside these columns; an oncoming car in the next lane closes faster and could
-   enter them only when its closing speed exceeds about 2.4x the ego's (3.5 m lanes).
-   A car cutting in enters the columns as it enters the lane.
+   on each side, along its path (straight, or bent by its yaw rate:
+   ``controllers.evidence``), projected at the depth Z_i = s cos p tau_i of a static
+   point on the fence. Or a fenced region anywhere across the view that the tracker
+   (``controllers.tracker``: regions followed over jobs, their motion over the ground,
+   the ego's path ahead) predicts into the ego's footprint within its TTC: a pedestrian
+   stepping out, a car crossing a junction, an oncoming car the ego turns across. An
+   actor inside the fence is at most that far if it does not close faster than the ego
+   drives, so an adjacent-lane car (static, slower or same-direction) lies outside these
+   columns; an oncoming car in the next lane closes faster and could enter them only
+   when its closing speed exceeds about 2.4x the ego's (3.5 m lanes). A car cutting in
+   enters the columns as it enters the lane.
 4. **Standing on the road, big enough**: an obstacle inside the fence stands on the
    road nearer than the fence's ground boundary, so its counted pixels reach down to
    the lowest counted row; a region whose bottom ends more than ``contact_px`` rows
