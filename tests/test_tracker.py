@@ -1,0 +1,78 @@
+"""The tracker predicts which fenced regions enter the ego's path (synthetic regions from a
+pinhole projection of targets moving in closed form)."""
+
+import numpy as np
+import pytest
+
+from controllers.base import Calibration
+from controllers.evidence import Blob, ground_ttc_map
+from controllers.road import ground_ttc_per_row
+from controllers.tracker import BlobTracker, Odometry, TrackerConfig
+from sim.camera import CameraConfig
+from sim.vehicles import EGO_SIZE_M
+
+THRESHOLDS_S = (0.8, 1.2146, 1.8442, 2.8)
+SPEED_MPS = 40 / 3.6
+
+
+def _cal() -> Calibration:
+    return Calibration.from_camera(CameraConfig(pitch_deg=0.0), EGO_SIZE_M)
+
+
+def _blob(cal, x_left_m, x_right_m, depth_m, tau_s):
+    u = [cal.cx_px + cal.fx_px * x / depth_m for x in (x_left_m, x_right_m)]
+    bound = next((t for t in THRESHOLDS_S if t >= tau_s), THRESHOLDS_S[-1])
+    mask = np.zeros((cal.height_px, cal.width_px), bool)
+    return Blob(mask, max(u[0], 0.0), min(u[1], cal.width_px - 1.0), bound)
+
+
+def _run(lateral_m, lateral_speed_mps, width_m=0.5, depth0_m=30.0, jobs=12):
+    """In-path predictions of a target whose left edge is at ``lateral_m`` (camera x, + right)
+    moving at ``lateral_speed_mps`` across a straight ego's path, job by job."""
+    cal = _cal()
+    tracker, odo = BlobTracker(TrackerConfig(), cal), Odometry()
+    out = []
+    for k in range(jobs):
+        t = 0.1 * k
+        pose = odo.update(t, SPEED_MPS, 0.0)
+        z = depth0_m - SPEED_MPS * t  # camera depth: the ego closes at its speed
+        x = lateral_m + lateral_speed_mps * t
+        blob = _blob(cal, x, x + width_m, z, z / SPEED_MPS)
+        (track,) = tracker.update(t, pose, SPEED_MPS, [blob])
+        out.append(tracker.in_path(track, t, pose, SPEED_MPS, 0.0))
+    return out
+
+
+def test_a_pedestrian_stepping_into_the_path_is_predicted_in_path_once_tracked():
+    # from 3.5 m right at 1.4 m/s: at the ego's arrival (2.7 s) it is in the middle of the path
+    pred = _run(3.5, -1.4)
+    assert pred[:2] == [False, False]  # fewer than min_hits regions: no prediction
+    assert all(pred[3:])
+
+
+def test_a_standing_pedestrian_beside_the_path_is_not():
+    assert not any(_run(3.0, 0.0))
+
+
+def test_a_pedestrian_walking_away_from_the_path_is_not():
+    assert not any(_run(-1.2, -1.4))
+
+
+def test_a_pedestrian_that_clears_before_the_ego_arrives_is_not():
+    # from 2 m right at 2.5 m/s: through the path and 4.7 m left of it when the ego arrives
+    assert not any(_run(2.0, -2.5)[4:])
+
+
+def test_ground_ttc_map_is_the_straight_road_rule_without_yaw():
+    cal = Calibration.from_camera(CameraConfig(), EGO_SIZE_M)
+    straight = ground_ttc_map(cal, SPEED_MPS, 0.0)
+    np.testing.assert_array_equal(straight, np.repeat(ground_ttc_per_row(cal, SPEED_MPS)[:, None], cal.width_px, 1))
+    # turning left, the ground on the right approaches sooner (dZ/dt = -(s cos p + w X))
+    turning = ground_ttc_map(cal, SPEED_MPS, 0.4)
+    row = int(np.flatnonzero(np.isfinite(straight[:, 0]))[0]) + 5
+    assert turning[row, -1] < straight[row, -1] and turning[row, 0] > straight[row, 0]
+
+
+def test_tracker_config_is_checked():
+    with pytest.raises(ValueError):
+        TrackerConfig(min_hits=1)
