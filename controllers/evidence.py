@@ -74,12 +74,29 @@ def corridor_mask(cal: Calibration, counted: np.ndarray, half_w_m: float, depth_
 @dataclass(frozen=True)
 class Blob:
     """A fenced region standing on the road, anywhere across the view: its pixels, column
-    extent [px] and the smallest fence threshold [s] that holds most of it."""
+    extent [px], the smallest fence threshold [s] that holds most of it, and the depth [m]
+    of the ground where it stands when that shows (None where the fenced road runs on
+    below it)."""
 
     mask: np.ndarray
     u_left: float
     u_right: float
     tau_bound_s: float
+    contact_depth_m: float | None = None
+
+
+def contact_depth(fenced: np.ndarray, mask: np.ndarray, u0: int, u1: int, ground_depth: np.ndarray) -> float | None:
+    """Depth [m] of the ground under a region: below its bottom, the first row of its columns
+    [u0, u1] that the fence leaves free is where it stands; None when the fence reaches the
+    image's bottom there (the road under it is inside the fence too: a target closing no
+    faster than the ego drives)."""
+    bottom = int(np.flatnonzero(mask.any(axis=1)).max())
+    rows = fenced[bottom:, u0 : u1 + 1].any(axis=1)
+    free = np.flatnonzero(~rows)
+    if free.size == 0:
+        return None
+    z = float(ground_depth[bottom + int(free[0])])
+    return z if math.isfinite(z) else None
 
 
 def fenced_blobs(
@@ -90,9 +107,11 @@ def fenced_blobs(
     lowest: int,
     contact_px: int,
     need_px: float,
+    ground_depth: np.ndarray,
 ) -> list[Blob]:
     """Standing regions of ``inside`` (the largest fence's counted inside pixels) of at least
-    ``need_px`` pixels, each with the smallest fence of ``thr`` that holds half of it."""
+    ``need_px`` pixels, each with the smallest fence of ``thr`` that holds half of it and
+    the depth where it stands (``contact_depth``; ``ground_depth``: (H,) per row [m])."""
     if not inside.any():
         return []
     n, labels, stats, _ = cv2.connectedComponentsWithStats(inside.astype(np.uint8), connectivity=8)
@@ -104,6 +123,8 @@ def fenced_blobs(
         m = labels == k
         shares = [(maps[i][m] > prob_inside).mean() for i in range(len(thr))]
         i_min = next((i for i, sh in enumerate(shares) if sh >= 0.5), len(thr) - 1)
-        left = stats[k, cv2.CC_STAT_LEFT]
-        out.append(Blob(m, float(left), float(left + stats[k, cv2.CC_STAT_WIDTH] - 1), float(thr[i_min])))
+        u0 = int(stats[k, cv2.CC_STAT_LEFT])
+        u1 = u0 + int(stats[k, cv2.CC_STAT_WIDTH]) - 1
+        z = contact_depth(maps[-1] > prob_inside, m, u0, u1, ground_depth)
+        out.append(Blob(m, float(u0), float(u1), float(thr[i_min]), z))
     return out

@@ -106,7 +106,7 @@ from controllers.geofence_config import (  # noqa: F401  (re-exported: the contr
     estimator_thresholds,
     frame_stride_ok,
 )
-from controllers.road import static_depth_m
+from controllers.road import ground_depth_per_row, static_depth_m
 from controllers.stages import StagedBrake
 from controllers.tracker import BlobTracker, Odometry
 
@@ -161,6 +161,7 @@ class GeofenceController(Controller):
                 est.reset()
         self._stages.reset()
         self._trackers = {v: BlobTracker(self.cfg.tracker, self._cals[v]) for v in self._fences}
+        self._ground_depth = {v: ground_depth_per_row(self._cals[v]) for v in self._fences}
         self._odometry = Odometry()
         self._streak = {v: np.zeros(len(f), dtype=np.int64) for v, f in self._fences.items()}
         self._quiet = self.cfg.release_frames  # nothing to hold at the start
@@ -189,9 +190,9 @@ class GeofenceController(Controller):
             inside = maps[i] > c.prob_inside
             area, standing = standing_regions(inside & region, lowest, c.contact_px)
             need = max(c.min_region_px, cal.fx_px * cal.fy_px * c.min_face_m2 / depth**2 if depth > 1e-6 else 0.0)
-            ahead = predicted & inside & bands[i]
-            if ahead.sum() > area:
-                area, standing = int(ahead.sum()), ahead
+            area_p, ahead = standing_regions(predicted & inside & bands[i], lowest, c.contact_px)
+            if area_p > area:
+                area, standing = area_p, ahead
             if area >= need:
                 sizes[i] = area
                 counted |= standing
@@ -209,7 +210,7 @@ class GeofenceController(Controller):
         need = max(c.min_region_px, cal.fx_px * cal.fy_px * c.min_face_m2 / depth**2 if depth > 1e-6 else 0.0)
         lowest = int(np.flatnonzero(bands[-1].any(axis=1)).max())
         inside = (maps[-1] > c.prob_inside) & bands[-1]
-        blobs = fenced_blobs(inside, maps, thr, c.prob_inside, lowest, c.contact_px, need)
+        blobs = fenced_blobs(inside, maps, thr, c.prob_inside, lowest, c.contact_px, need, self._ground_depth[view])
         tracker = self._trackers[view]
         for blob, track in zip(blobs, tracker.update(t_s, self._pose, speed_mps, blobs)):
             if tracker.in_path(track, t_s, self._pose, speed_mps, yaw_rate):

@@ -15,7 +15,10 @@ Per job and view:
    contact time t0 is the earliest such bound over its history, and its depth at t_k is
    the static depth of the TTC left then, Z_k = s cos p (t0 - t_k) (at least
    ``min_ttc_s``). Every observation is re-placed with the current t0, so a tighter
-   bound rescales the whole history at once instead of making a jump in it.
+   bound rescales the whole history at once instead of making a jump in it. Where the
+   ground under a region shows (the road below it lies outside the fence: it closes
+   faster than the ego drives, an oncoming car), that ground's depth is used when it is
+   the larger: the static depth would put such a car nearer and so nearer the path.
 3. **Ground motion**: each region's inner edge (the column nearest the image centre: a
    region at the image's border is cut there, its outer edge and centre move with the
    cut) at Z_k, moved into one odometry frame by dead reckoning from the ego's speed and
@@ -83,6 +86,7 @@ class _Obs:
     u_left: float
     u_right: float
     tau_bound_s: float
+    contact_depth_m: float | None
     speed_mps: float
     pose: tuple[float, float, float]  # odometry (x, y, psi) at t
 
@@ -152,7 +156,7 @@ class BlobTracker:
             else:
                 free.remove(best)
             tr = self.tracks[best]
-            tr.obs.append(_Obs(t_s, b.u_left, b.u_right, b.tau_bound_s, speed_mps, pose))
+            tr.obs.append(_Obs(t_s, b.u_left, b.u_right, b.tau_bound_s, b.contact_depth_m, speed_mps, pose))
             del tr.obs[: -c.window]
             tr.missed = 0
             out.append(tr)
@@ -171,7 +175,7 @@ class BlobTracker:
             if o.u_left <= cal.cx_px <= o.u_right:
                 return None
             inner = o.u_right if o.u_right < cal.cx_px else o.u_left
-            z = max(o.speed_mps * cos_p * max(t0 - o.t_s, c.min_ttc_s), 0.5)
+            z = max(o.speed_mps * cos_p * max(t0 - o.t_s, c.min_ttc_s), o.contact_depth_m or 0.0, 0.5)
             fwd, left = z + cal.mount_forward_m, -(inner - cal.cx_px) / cal.fx_px * z
             x, y, psi = o.pose
             pts.append((x + fwd * math.cos(psi) - left * math.sin(psi), y + fwd * math.sin(psi) + left * math.cos(psi)))

@@ -1,33 +1,33 @@
 #!/usr/bin/env bash
 # A fine-tune of the shipped weights on scenes with pedestrians and cyclists, averaged with its start.
 #
-#   1. data: for s in "val 400" "test 400" "train 8000"; do set -- $s; bittc generate --out data/bittc_v8 \
-#              --fovea-share 0.5 --vehicle-texture mixed --realism-share 0.5 --vru-share 0.5 --split $1 \
-#              --samples $2 --seed 8 --workers 2; done
-#   2. this script: [START=FILE] [SHIP=1] bash docs/train_vru_weights.sh [DATA_V8] [OUT] [RELEASE]
+#   1. data: for s in "val 400" "test 400" "train 8000"; do set -- $s; bittc generate --out data/bittc_v9 \
+#              --fovea-share 0.4 --vehicle-texture mixed --realism-share 0.5 --vru-share 0.6 --split $1 \
+#              --samples $2 --seed 9 --workers 2; done
+#   2. this script: [START=FILE] [SHIP=1] bash docs/train_vru_weights.sh [DATA_V9] [OUT] [RELEASE]
 #
 # START is the shipped bittc-2026.12-realism1-blend (bittc_core/weights/bittc_default.pt) by
-# default. bittc_v8 is bittc_v7's recipe (half the samples through a fovea, half through a
-# sensor, vehicles plain or textured) with pedestrians and cyclists in half of its scenes
-# (sim.random_vrus). One binary run with the in-path actor pixels weighted (the checkpoint
-# kept is the best by validation mIoU), then the frozen continuous stage; its best
+# default. bittc_v9 is bittc_v7's recipe (samples through a fovea, half through a sensor,
+# vehicles plain or textured) with pedestrians and cyclists in 60 % of its scenes
+# (sim.random_vrus). One binary run with the in-path actor pixels and the pedestrian and
+# cyclist pixels weighted (the checkpoint kept is the best by validation mIoU), then the frozen continuous stage; its best
 # checkpoint is written to OUT/release.pt with its release name. Last, the blend: the
 # element-wise mean of START and OUT/release.pt, OUT/blend.pt, named RELEASE-blend; SHIP=1
 # copies it to bittc_core/weights/bittc_default.pt. The config is the shipped one
 # (cpu-small-corr), so the latency does not change.
 set -euo pipefail
-DATA8=${1:-data/bittc_v8}
-OUT=${2:-runs/vru1}
-RELEASE=${3:-bittc-2026.12-vru1}
-BINARY_STEPS=${BINARY_STEPS:-1500}
+DATA9=${1:-data/bittc_v9}
+OUT=${2:-runs/vru2}
+RELEASE=${3:-bittc-2026.12-vru2}
+BINARY_STEPS=${BINARY_STEPS:-2000}
 CONT_STEPS=${CONT_STEPS:-250}
 START=${START:-bittc_core/weights/bittc_default.pt}
 mkdir -p "$OUT"
 source "$(dirname "$0")/release_steps.sh"
 cp "$START" "$OUT/start.pt"  # the start as it was, whatever SHIP later replaces
-bittc train --data "$DATA8" --config cpu-small-corr --stage binary --steps "$BINARY_STEPS" --seed 80 --lr 5e-5 \
+bittc train --data "$DATA9" --config cpu-small-corr --stage binary --steps "$BINARY_STEPS" --seed 90 --lr 5e-5 \
     --warmup-steps 100 --val-every 500 --val-limit 256 --lovasz-weight 0.5 --actor-weight 2 --inpath-weight 4 \
-    --lr-mult segnet.corr_=10 --init "$OUT/start.pt" --out "$OUT/binary.pt"
-bittc train --data "$DATA8" --config cpu-small-corr --stage continuous --freeze-binary --steps "$CONT_STEPS" \
+    --vru-weight 6 --lr-mult segnet.corr_=10 --init "$OUT/start.pt" --out "$OUT/binary.pt"
+bittc train --data "$DATA9" --config cpu-small-corr --stage continuous --freeze-binary --steps "$CONT_STEPS" \
     --warmup-steps 50 --seed 0 --lr 2e-4 --val-every 125 --init "$OUT/binary.pt" --out "$OUT/continuous.pt"
 finish_release "$OUT/start.pt" "$OUT" "$RELEASE"

@@ -27,6 +27,7 @@ AHEAD_CLASSES = ("gvt", "car", "van", "truck")
 AHEAD_TTC_RANGE_S = (0.3, 4.0)  # [s] bumper-to-bumper TTC at the first frame, log-uniform
 AHEAD_OVERLAP = (0.25, 1.0)  # |share of the ego's width overlapped|, either side (Euro NCAP: 50-100 %)
 AHEAD_MAX_OTHER_ACTORS = 6
+VRU_MAX_VEHICLES = 4  # random vehicles in a scene with pedestrians and cyclists
 
 
 def actor_motion(rng: np.random.Generator, motion: str, road: RoadConfig, v_ego: float):
@@ -96,7 +97,8 @@ def place_actors(rng, world: World, hw_road, scene: SceneDraw) -> list:
     if scene.fovea:
         _place_fovea_others(rng, world, hw_road, scene, taken, actors)
         return actors
-    for _ in range(int(rng.integers(0, (AHEAD_MAX_OTHER_ACTORS if scene.ahead else MAX_ACTORS) + 1))):
+    limit = AHEAD_MAX_OTHER_ACTORS if scene.ahead else VRU_MAX_VEHICLES if scene.vrus else MAX_ACTORS
+    for _ in range(int(rng.integers(0, limit + 1))):
         motion = str(rng.choice(MOTIONS))
         spec = sample_spec(rng, str(rng.choice(CLASSES)))
         _place_clear(

@@ -26,6 +26,7 @@ class SceneDraw:
     ego_decel: float  # [m/s^2]
     ahead: bool  # a braking case ahead
     fovea: bool = False  # seen through the camera's fovea (sim.fovea_scene)
+    vrus: bool = False  # with pedestrians and cyclists (sim.random_vrus)
 
 
 def random_camera(rng: np.random.Generator, base: CameraConfig) -> CameraConfig:

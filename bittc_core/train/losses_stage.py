@@ -82,10 +82,12 @@ def stage_losses(
         thr = binary_thresholds(c, batch, mask, mc.frame_dt_s, gen).to(device)
         logits = net.classify_eta(ctx, feats[:b], thr)
         weight = None
-        if c.actor_weight != 1.0 or c.inpath_weight != 1.0:
+        if c.actor_weight != 1.0 or c.inpath_weight != 1.0 or c.vru_weight != 1.0:
             weight = torch.where(batch["instance"] > 0, c.actor_weight, 1.0)
             if "inpath" in batch:  # the built-in synthetic data has no road, no path
                 weight = torch.where(batch["inpath"], c.inpath_weight, weight)
+            if c.vru_weight != 1.0 and "actor_class" in batch:  # pedestrians (2) and cyclists (3)
+                weight = torch.where(batch["actor_class"] >= 2, c.vru_weight, weight)
             weight = weight[:, None]
         labels = eta_labels(eta, thr)
         out["ttc"] = masked_bce(logits, labels, mask[:, None], weight)

@@ -70,6 +70,12 @@ def _add_loss_flags(p: argparse.ArgumentParser) -> None:
         "nearer than 80 m times a fovea sample's zoom), instead of --actor-weight there (default 1)",
     )
     p.add_argument(
+        "--vru-weight",
+        type=float,
+        default=1.0,
+        help="binary stage: loss weight of pedestrian and cyclist pixels, instead of the two above there (default 1)",
+    )
+    p.add_argument(
         "--lovasz-weight",
         type=float,
         default=0.0,
@@ -149,6 +155,8 @@ def check_train_flags(args) -> None:
         raise CliError(f"--actor-weight {args.actor_weight}: must be > 0 and finite")
     if not 0 < args.inpath_weight < math.inf:
         raise CliError(f"--inpath-weight {args.inpath_weight}: must be > 0 and finite")
+    if not 0 < args.vru_weight < math.inf:
+        raise CliError(f"--vru-weight {args.vru_weight}: must be > 0 and finite")
     if not 0 <= args.lovasz_weight < math.inf:
         raise CliError(f"--lovasz-weight {args.lovasz_weight}: must be >= 0 and finite")
     if not 0 <= args.pixel_thresholds <= 1:

@@ -64,6 +64,7 @@ def stage_configs(args, net, stages, lr_mults, distill_weight) -> dict:
         seed=args.seed,
         actor_weight=args.actor_weight,
         inpath_weight=args.inpath_weight,
+        vru_weight=args.vru_weight,
         lovasz_weight=args.lovasz_weight,
         distill_weight=distill_weight,
         pixel_threshold_share=args.pixel_thresholds,

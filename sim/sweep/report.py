@@ -10,6 +10,7 @@ from pathlib import Path
 from bittc_core.atomic import write_text_atomic
 from sim.sweep import ncap, tables
 from sim.sweep.plots import config_label
+from sim.sweep.tables import FAMILY_HEAD, family_summary
 
 _CSS = """
 body { font-family: system-ui, sans-serif; margin: 2em auto; max-width: 1100px; color: #222; }
@@ -126,6 +127,10 @@ def write_report(
         "Euro NCAP bands and gate: <code>sim/sweep/ncap.py</code>). Also as <a href='summary.csv'>summary.csv</a>, "
         "<a href='summary.md'>summary.md</a>; every run in <a href='results.csv'>results.csv</a>.</p>",
         _summary_table(summary),
+        "<h2>Per family</h2>",
+        "<p>Threats avoided, those that braking can avoid at all, false alarms, the mean impact speed of "
+        "the collisions and Euro NCAP-style points from the impact speed (<code>sim/ncap_score.py</code>).</p>",
+        _table(list(FAMILY_HEAD), [[_esc(x) for x in c] for c in family_summary(rows)], left=5),
         "<h2>Plots</h2>",
     ]
     parts += [f'<p><img src="plots/{_esc(p)}" alt="{_esc(p)}"></p>' for p in plots]

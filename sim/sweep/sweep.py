@@ -166,7 +166,7 @@ def _write_products(out, settings, cases, plan, outcome, command, workers, backe
     rows = [result_row(s, by_name[s.case], _load_summary(out, s), outcome.failed.get(s.run_id)) for s in plan]
     write_results(out / "results.csv", rows)
     summary = summarize(rows)
-    outcome.summary_md = write_summary(out, summary)
+    outcome.summary_md = write_summary(out, summary, rows)
     plots = plot_all(out, rows, summary, 1.0 / CameraConfig().fps_hz, settings.timeline_case)
     notes = [
         f"{outcome.runs} runs; {outcome.executed} executed by the last call in {outcome.seconds:.0f} s "

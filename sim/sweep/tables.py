@@ -138,12 +138,51 @@ def summarize(rows: list[dict]) -> list[dict]:
     return out
 
 
-def write_summary(out_dir, summary: list[dict]) -> str:
-    """summary.csv and summary.md; -> the Markdown table."""
+def write_summary(out_dir, summary: list[dict], rows: list[dict] | None = None) -> str:
+    """summary.csv and summary.md (with ``rows``, the per-family table below it); -> the Markdown."""
     write_text_atomic(out_dir / "summary.csv", _csv(SUMMARY_COLUMNS, summary))
     md = markdown_table(summary)
+    if rows:
+        md += "\n\n" + family_markdown(rows)
     write_text_atomic(out_dir / "summary.md", md + "\n")
     return md
+
+
+FAMILY_HEAD = ("controller", "fovea", "K", "latency", "family", "avoided", "avoidable", "false alarms", "impact [km/h]")
+FAMILY_HEAD += ("points",)
+
+
+def family_summary(rows: list[dict]) -> list[tuple[str, ...]]:
+    """Per configuration and scenario family (``sim.ncap_score.family_rows``), as cells of ``FAMILY_HEAD``."""
+    from sim.ncap_score import family_rows
+
+    groups: dict[tuple, list[dict]] = {}
+    for r in rows:
+        if r["status"] == "ok":
+            groups.setdefault((r["controller"], r["fovea_zoom"], r["num_alphas"], r["latency_mode"]), []).append(r)
+    out = []
+    for (controller, zoom, k, latency), rs in groups.items():
+        for f in family_rows(rs):
+            out.append(
+                (
+                    str(controller),
+                    fovea_label(zoom),
+                    str(k or "–"),
+                    str(latency),
+                    f["family"],
+                    f"{f['avoided']}/{f['threats']}" if f["threats"] else "–",
+                    str(f["avoidable"]) if f["threats"] else "–",
+                    f"{f['false_alarms']}/{f['benign']}" if f["benign"] else "–",
+                    _fmt(f["mean_impact_kph"], 1),
+                    "–" if f["points"] is None else f"{f['points']:.2f}/{f['threats']}",
+                )
+            )
+    return out
+
+
+def family_markdown(rows: list[dict]) -> str:
+    lines = ["| " + " | ".join(FAMILY_HEAD) + " |", "|" + "---|" * len(FAMILY_HEAD)]
+    return "\n".join(lines + ["| " + " | ".join(c) + " |" for c in family_summary(rows)])
 
 
 def _fmt(v, nd=2) -> str:
