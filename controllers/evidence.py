@@ -111,7 +111,8 @@ def fenced_blobs(
 ) -> list[Blob]:
     """Standing regions of ``inside`` (the largest fence's counted inside pixels) of at least
     ``need_px`` pixels, each with the smallest fence of ``thr`` that holds half of it and
-    the depth where it stands (``contact_depth``; ``ground_depth``: (H,) per row [m])."""
+    the depth where it stands (``contact_depth`` in that fence; ``ground_depth``: (H,) per
+    row [m])."""
     if not inside.any():
         return []
     n, labels, stats, _ = cv2.connectedComponentsWithStats(inside.astype(np.uint8), connectivity=8)
@@ -125,6 +126,7 @@ def fenced_blobs(
         i_min = next((i for i, sh in enumerate(shares) if sh >= 0.5), len(thr) - 1)
         u0 = int(stats[k, cv2.CC_STAT_LEFT])
         u1 = u0 + int(stats[k, cv2.CC_STAT_WIDTH]) - 1
-        z = contact_depth(maps[-1] > prob_inside, m, u0, u1, ground_depth)
+        # the smallest fence that holds it: the road between it and the ego shows there first
+        z = contact_depth(maps[i_min] > prob_inside, m, u0, u1, ground_depth)
         out.append(Blob(m, float(u0), float(u1), float(thr[i_min]), z))
     return out

@@ -39,6 +39,9 @@ estimator's map p_i = p(0 < tau <= tau_i)):
    for it).
    Rows count only when the ground one row below them is
    outside the fence too (near the horizon one row spans tens of metres).
+   A view whose pair turned by more than ``max_rotation_px`` (the fastest yaw rate within
+   the pair x its interval x focal length: the fovea in a junction turn) gives no evidence in that job: its flow
+   leaves the estimator's range.
 5. **Nested** (``nested``): what lies inside tau_i lies inside every larger fence too,
    so a fence's region counts only when some larger fence has one in the same job (the
    largest fence stands alone). A far vehicle that the network reads into a middle
@@ -163,6 +166,7 @@ class GeofenceController(Controller):
         self._trackers = {v: BlobTracker(self.cfg.tracker, self._cals[v]) for v in self._fences}
         self._ground_depth = {v: ground_depth_per_row(self._cals[v]) for v in self._fences}
         self._odometry = Odometry()
+        self._yaws: list[tuple[float, float]] = []  # (t [s], |yaw rate| [rad/s]) of the recent jobs
         self._streak = {v: np.zeros(len(f), dtype=np.int64) for v, f in self._fences.items()}
         self._quiet = self.cfg.release_frames  # nothing to hold at the start
         self._last = BrakeCommand()
@@ -232,6 +236,9 @@ class GeofenceController(Controller):
         c, s = self.cfg, float(obs.ego_speed_mps)
         yaw = float(obs.ego_yaw_rate_radps)
         self._pose = self._odometry.update(obs.t_s, s, yaw)
+        # the pair's rotation: the fastest yaw rate of the jobs within it, times its interval
+        self._yaws = [(t, w) for t, w in self._yaws if t >= obs.t_s - obs.dt_s - 1e-6] + [(obs.t_s, abs(yaw))]
+        turn_rad = max(w for _, w in self._yaws) * obs.dt_s
         est_ms = 0.0
         tel: dict = {}
         views: dict[str, GeofenceView] = {}
@@ -244,7 +251,12 @@ class GeofenceController(Controller):
             t0 = time.perf_counter()
             maps = self._estimators[v].geofence(prev, latest, self._thr_est[idx])
             est_ms += (time.perf_counter() - t0) * 1e3
-            sizes, counted, corridor, n_pred = self._evidence(maps, thr, v, s, yaw, obs.t_s)
+            if turn_rad * self._cals[v].fx_px > c.max_rotation_px:  # the pair turned too far for this view
+                self._streak[v][:] = 0
+                empty = np.zeros(maps.shape[1:], dtype=bool)
+                sizes, counted, corridor, n_pred = np.zeros(len(thr), dtype=np.int64), empty, empty, 0
+            else:
+                sizes, counted, corridor, n_pred = self._evidence(maps, thr, v, s, yaw, obs.t_s)
             tel[f"predicted_{v}"] = n_pred
             fired = self._fired(v, sizes)
             if fired.any():

@@ -80,6 +80,9 @@ class GeofenceConfig:
     frame_stride: int = DEFAULT_FRAME_STRIDE  # [frames] the pair is (k - stride, k): 3x the motion per pair
     fovea_fences_from_s: float = DEFAULT_FOVEA_FENCES_FROM_S  # [s] with a fovea: fences below run on the wide view only
     tracker: TrackerConfig = field(default_factory=TrackerConfig)  # fenced regions followed over jobs
+    # [px] a view whose pair turned further than this (yaw rate x pair interval x focal length)
+    # gives no evidence in that job: its flow leaves the estimator's range (a turn: 8 deg in 0.3 s)
+    max_rotation_px: float = 24.0
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "thresholds_s", check_thresholds(self.thresholds_s))
@@ -93,6 +96,7 @@ class GeofenceConfig:
             "persistence_frames": self.persistence_frames >= 1,
             "release_frames": self.release_frames >= 1,
             "min_speed_mps": self.min_speed_mps >= 0,
+            "max_rotation_px": self.max_rotation_px > 0,
             "frame_stride": frame_stride_ok(self.frame_stride),
             "fovea_fences_from_s": math.isfinite(self.fovea_fences_from_s) and self.fovea_fences_from_s >= 0,
         }

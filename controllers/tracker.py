@@ -24,12 +24,15 @@ Per job and view:
    cut) at Z_k, moved into one odometry frame by dead reckoning from the ego's speed and
    yaw rate, gives the target's velocity over the ground by a least-squares line over
    the last ``window`` jobs. A region across the centre is in the corridor now: the
-   corridor rule of ``controllers.geofence`` judges it.
+   corridor rule of ``controllers.geofence`` judges it; one that touches the image's side
+   is cut there and predicts nothing.
 4. **Predict**: the ego keeps its speed and yaw rate; the target keeps its velocity.
    Sampled every ``step_s`` up to the track's TTC plus ``horizon_pad_s``: does the inner
    edge (``target_half_length_m`` along the ego) enter the ego's footprint widened by
-   ``margin_m`` each side? Tracks with fewer than ``min_hits`` regions, or a ground
-   speed above ``max_speed_mps`` (a bad association), predict nothing.
+   ``margin_m`` each side? Tracks with fewer than ``min_hits`` regions, a ground speed
+   above ``max_speed_mps`` (a bad association) or below ``min_speed_mps`` (standing: the
+   corridor rule judges it; a turning ego's arc, held beyond the turn, would sweep the
+   kerbs and houses on its inside) predict nothing.
 
 Odometry: x [m] forward and y [m] left of the ego's footprint centre at the run's
 start, heading psi [rad]. Camera frame to ego frame: forward = Z + mount_forward_m,
@@ -61,6 +64,7 @@ class TrackerConfig:
     step_s: float = 0.05  # [s]
     min_ttc_s: float = 0.2  # [s] the smallest TTC a depth is placed at
     max_speed_mps: float = 15.0  # [m/s] a faster fitted ground speed is a bad association
+    min_speed_mps: float = 0.8  # [m/s] a slower target is standing: the corridor rule judges it
 
     def __post_init__(self) -> None:
         ok = (
@@ -74,7 +78,7 @@ class TrackerConfig:
             and self.horizon_pad_s >= 0
             and self.step_s > 0
             and self.min_ttc_s > 0
-            and self.max_speed_mps > 0
+            and 0 <= self.min_speed_mps < self.max_speed_mps
         )
         if not ok:
             raise ValueError(f"TrackerConfig out of range: {self}")
@@ -167,12 +171,13 @@ class BlobTracker:
 
     def _ground_points(self, tr: Track, t0: float) -> tuple[np.ndarray, np.ndarray] | None:
         """(times (N,), odometry points (N, 2) of the inner edge); None when a region lies
-        across the image centre."""
+        across the image centre, or touches the image's side (cut there: where it ends is
+        not seen)."""
         cal, c = self.cal, self.cfg
         cos_p = math.cos(math.radians(cal.pitch_deg))
         ts, pts = [], []
         for o in tr.obs:
-            if o.u_left <= cal.cx_px <= o.u_right:
+            if o.u_left <= cal.cx_px <= o.u_right or o.u_left <= 0 or o.u_right >= cal.width_px - 1:
                 return None
             inner = o.u_right if o.u_right < cal.cx_px else o.u_left
             z = max(o.speed_mps * cos_p * max(t0 - o.t_s, c.min_ttc_s), o.contact_depth_m or 0.0, 0.5)
@@ -196,7 +201,7 @@ class BlobTracker:
         A = np.stack([np.ones_like(ts), ts - tm], axis=1)
         coef, *_ = np.linalg.lstsq(A, pts, rcond=None)
         vel = coef[1]
-        if float(np.hypot(*vel)) > c.max_speed_mps:
+        if not c.min_speed_mps <= float(np.hypot(*vel)) <= c.max_speed_mps:
             return False
         horizon = max(t0 - t_s, 0.0) + c.horizon_pad_s
         times = np.arange(0.0, horizon + 1e-9, c.step_s)

@@ -22,7 +22,7 @@ def run(args) -> int:
     cat = scenarios.bundled()
     if args.suites:
         for name, what in scenarios.SUITES.items():
-            print(f"{name:<8} {len(scenarios.resolve_suite(name)):>3} cases  {what}")
+            print(f"{name:<10} {len(scenarios.resolve_suite(name)):>3} cases  {what}")
         return 0
     for family, cases in cat.families.items():
         kind = "threat" if cases[0].threat else "benign"
