@@ -208,7 +208,7 @@ class GeofenceController(Controller):
         tracker predicts into the ego's path (``controllers.tracker``)."""
         c, cal = self.cfg, self._cals[view]
         out = np.zeros(maps.shape[1:], dtype=bool)
-        if not c.tracker.enabled or not bands[-1].any():
+        if not c.tracker.enabled or view not in c.tracker.views or not bands[-1].any():
             return out
         depth = static_depth_m(cal, speed_mps, thr[-1])
         need = max(c.min_region_px, cal.fx_px * cal.fy_px * c.min_face_m2 / depth**2 if depth > 1e-6 else 0.0)

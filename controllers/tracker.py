@@ -29,7 +29,10 @@ Per job and view:
 4. **Predict**: the ego keeps its speed and yaw rate; the target keeps its velocity.
    Sampled every ``step_s`` up to the track's TTC plus ``horizon_pad_s``: does the inner
    edge (``target_half_length_m`` along the ego) enter the ego's footprint widened by
-   ``margin_m`` each side? Tracks with fewer than ``min_hits`` regions, a ground speed
+   ``margin_m`` each side? Only a track whose inner edge's bearing (the ego's rotation
+   taken out) comes in or holds predicts: beside the path a standing object's bearing
+   always moves out as the ego approaches, at any depth, so no error of the depth (the
+   fences' TTC bounds are coarse) can bring it in. Tracks with fewer than ``min_hits`` regions, a ground speed
    above ``max_speed_mps`` (a bad association) or below ``min_speed_mps`` (standing: the
    corridor rule judges it; a turning ego's arc, held beyond the turn, would sweep the
    kerbs and houses on its inside) predict nothing.
@@ -53,6 +56,9 @@ from controllers.evidence import Blob
 @dataclass(frozen=True)
 class TrackerConfig:
     enabled: bool = True  # False: only the corridor now counts (the straight-road controller)
+    # the views it runs in: the wide view sees a road user stepping out near the ego; the fovea's
+    # regions are far targets (60 m at 80 km/h) whose coarse depth turns fence noise into motion
+    views: tuple[str, ...] = ("wide",)
     gate_frac: float = 0.6  # [-] association gate, share of the wider region's width
     min_gate_px: float = 4.0  # [px]
     min_hits: int = 3  # [jobs] regions before a track predicts
@@ -187,10 +193,29 @@ class BlobTracker:
             ts.append(o.t_s)
         return np.asarray(ts), np.asarray(pts)
 
+    def _closing_in(self, tr: Track) -> bool:
+        """Whether the inner edge's bearing, with the ego's own rotation taken out, moves
+        towards the image centre over the window (least-squares slope <= 0): beside a
+        straight path a standing object's bearing always moves outwards as the ego
+        approaches, whatever its depth, while a target on a collision course keeps its
+        bearing or comes in."""
+        cal = self.cal
+        ts, dist = [], []
+        psi0 = tr.obs[0].pose[2]
+        for o in tr.obs:
+            inner = o.u_right if o.u_right < cal.cx_px else o.u_left
+            bearing = (inner - cal.cx_px) / cal.fx_px - (o.pose[2] - psi0)  # turning left moves the world right
+            ts.append(o.t_s)
+            dist.append(abs(bearing))
+        ts = np.asarray(ts) - ts[0]
+        return float(np.polyfit(ts, dist, 1)[0]) <= 0.0 if np.ptp(ts) > 0 else False
+
     def in_path(self, tr: Track, t_s: float, pose, speed_mps: float, yaw_rate_radps: float) -> bool:
         """Whether track ``tr`` is predicted to enter the ego's widened footprint within its TTC."""
         c, cal = self.cfg, self.cal
         if len(tr.obs) < c.min_hits or speed_mps <= 0:
+            return False
+        if not self._closing_in(tr):
             return False
         t0 = tr.contact_time_s()
         placed = self._ground_points(tr, t0)
