@@ -112,6 +112,7 @@ def test_dataset_tensors_have_documented_shapes_and_flip_consistently(tmp_path):
         "flow_px": ((2, 48, 144), torch.float32),
         "valid": ((48, 144), torch.bool),
         "instance": ((48, 144), torch.int64),
+        "actor_class": ((48, 144), torch.int64),
         "inpath": ((48, 144), torch.bool),
         "dt_s": ((), torch.float32),
         "intrinsics": ((4,), torch.float32),
@@ -312,3 +313,25 @@ def test_mixed_vehicle_style_draws_both_styles(tmp_path):
     for variant, same in ((0, plain), (1, detailed)):
         assert mixed.path("paint", variant, 2).read_bytes() == same.path("paint", variant, 2).read_bytes()
     assert mixed.path("asphalt", 1).read_bytes() == plain.path("asphalt", 1).read_bytes()  # ground unchanged
+
+
+def test_road_user_scenes_carry_their_classes(tmp_path):
+    from dataclasses import replace
+
+    import yaml
+
+    from bittc_core.metrics import ACTOR_CLASSES
+
+    generate(tmp_path, replace(SMALL, vru_share=1.0), "train", 2, workers=1, backend="local", progress=False)
+    for i in range(2):
+        meta = json.loads((tmp_path / "train" / f"{i:06d}" / "meta.json").read_text())
+        kinds = {a["kind"] for a in meta["actors"]}
+        assert kinds & {"adult", "child", "cyclist"}
+        item = TTCDataset(tmp_path, "train")[i]
+        inst, cls = item["instance"].numpy(), item["actor_class"].numpy()
+        for a in meta["actors"]:
+            want = {"adult": "pedestrian", "child": "pedestrian", "cyclist": "cyclist"}.get(a["kind"], "car")
+            px = cls[inst == a["instance"]]
+            assert all(ACTOR_CLASSES[int(c)] == want for c in px), (a["kind"], set(px.tolist()))
+        assert (cls[inst <= 0] == 0).all()
+    assert yaml.safe_load((tmp_path / "generation.yaml").read_text())["vru_share"] == 1.0

@@ -7,7 +7,9 @@ Each item is one frame pair (by default the last pair of the clip), as a dict:
     tau_s                     float32 (H, W)   TTC from the latest capture [s], +inf at eta = 1
     flow_px                   float32 (2, H, W) (u, v) = latest - previous position [px]
     valid                     bool    (H, W)
-    instance                  int64   (H, W)   -1 sky, 0 static, > 0 vehicle
+    instance                  int64   (H, W)   -1 sky, 0 static, > 0 actor (vehicle or road user)
+    actor_class               int64   (H, W)   0 none, 1 car (any vehicle), 2 pedestrian, 3 cyclist
+                                               (``class_map``; bittc_core.metrics.ACTOR_CLASSES)
     inpath                    bool    (H, W)   vehicle pixels within INPATH_HALF_WIDTH_M of the
                                                optical axis, nearer than INPATH_MAX_DEPTH_M
                                                times the view's zoom (a fovea sample's
