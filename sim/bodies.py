@@ -7,6 +7,8 @@ its footprint frame and hidden 50 m below the ground until posed.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from sim import meshes
@@ -113,3 +115,19 @@ def create_part_body(c, part) -> int:
             rgbaColors=[[*b.rgb, 1.0] for b in part.boxes],
         )
     return c.createMultiBody(0, -1, vs, basePosition=[0, 0, -50.0])
+
+
+def quat_from_matrix(R: np.ndarray) -> list[float]:
+    """(x, y, z, w) quaternion of a rotation matrix (Shepperd's method, stable for any angle)."""
+    tr = float(np.trace(R))
+    i = int(np.argmax([tr, R[0, 0], R[1, 1], R[2, 2]]))
+    if i == 0:
+        w = math.sqrt(1.0 + tr) / 2
+        return [(R[2, 1] - R[1, 2]) / (4 * w), (R[0, 2] - R[2, 0]) / (4 * w), (R[1, 0] - R[0, 1]) / (4 * w), w]
+    a, b, c = (i - 1, i % 3, (i + 1) % 3)
+    q = [0.0, 0.0, 0.0, 0.0]
+    q[a] = math.sqrt(max(1.0 + R[a, a] - R[b, b] - R[c, c], 0.0)) / 2
+    q[b] = (R[b, a] + R[a, b]) / (4 * q[a])
+    q[c] = (R[c, a] + R[a, c]) / (4 * q[a])
+    q[3] = (R[c, b] - R[b, c]) / (4 * q[a])
+    return q

@@ -22,7 +22,6 @@ from __future__ import annotations
 import math
 import shutil
 import tempfile
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -34,28 +33,12 @@ with c_output_suppressed():
     from pybullet_utils import bullet_client
 
 from sim import textures
-from sim.bodies import create_part_body, create_static_bodies, create_vehicle_bodies
-from sim.camera import CameraConfig, Pinhole, view_matrix_gl
+from sim.bodies import create_part_body, create_static_bodies, create_vehicle_bodies, quat_from_matrix
+from sim.camera import CameraConfig, Pinhole
 from sim.scenery import RoadConfig, Scenery, StaticShape, build_scenery
 from sim.vehicles import VehicleSpec
 from sim.vru import VruSpec, parts
-
-
-@dataclass
-class Render:
-    """One rendered frame at the camera's output resolution.
-
-    rgb: (H, W, 3) uint8. depth_m: (H, W) float32, depth Z along the optical axis [m]
-    (``far_m`` where nothing was hit). instance: (H, W) int32 (-1 sky, 0 static, >0 actor).
-    part: (H, W) int32, the rigid part (see the module docstring); None where no road user
-    was rendered (then every part is its instance).
-    """
-
-    rgb: np.ndarray
-    depth_m: np.ndarray
-    instance: np.ndarray
-    part: np.ndarray | None = None
-
+from sim.world_render import Render, render_view  # noqa: F401  (Render re-exported)
 
 PART_ID_BASE = 1 << 20  # part ids of road users' rigid parts start here (instances stay below)
 SCENES_PER_CLIENT = 256  # reconnect after this many resets: removeBody keeps the visual shape records
@@ -63,22 +46,6 @@ SCENES_PER_CLIENT = 256  # reconnect after this many resets: removeBody keeps th
 
 def _quat_z(heading_rad: float) -> list[float]:
     return [0.0, 0.0, math.sin(heading_rad / 2), math.cos(heading_rad / 2)]
-
-
-def _quat_from_matrix(R: np.ndarray) -> list[float]:
-    """(x, y, z, w) quaternion of a rotation matrix (Shepperd's method, stable for any angle)."""
-    tr = float(np.trace(R))
-    i = int(np.argmax([tr, R[0, 0], R[1, 1], R[2, 2]]))
-    if i == 0:
-        w = math.sqrt(1.0 + tr) / 2
-        return [(R[2, 1] - R[1, 2]) / (4 * w), (R[0, 2] - R[2, 0]) / (4 * w), (R[1, 0] - R[0, 1]) / (4 * w), w]
-    a, b, c = (i - 1, i % 3, (i + 1) % 3)
-    q = [0.0, 0.0, 0.0, 0.0]
-    q[a] = math.sqrt(max(1.0 + R[a, a] - R[b, b] - R[c, c], 0.0)) / 2
-    q[b] = (R[b, a] + R[a, b]) / (4 * q[a])
-    q[c] = (R[c, a] + R[a, c]) / (4 * q[a])
-    q[3] = (R[c, b] - R[b, c]) / (4 * q[a])
-    return q
 
 
 class World:
@@ -263,7 +230,7 @@ class World:
         if len(world_T_parts) != len(entries):
             raise ValueError(f"road user {instance} has {len(entries)} parts, got {len(world_T_parts)} poses")
         for (_, uid), T in zip(entries, world_T_parts):
-            q = _quat_from_matrix(np.asarray(T)[:3, :3])
+            q = quat_from_matrix(np.asarray(T)[:3, :3])
             self.client.resetBasePositionAndOrientation(uid, [float(v) for v in T[:3, 3]], q)
 
     def set_vehicle_pose(self, instance: int, x_m: float, y_m: float, heading_rad: float) -> None:
@@ -298,56 +265,5 @@ class World:
         """Render the scene from an OpenCV camera pose ``cam_T_world`` (4x4) through
         ``pinhole`` (default: the camera's wide view; ``camera.fovea()`` for the fovea,
         which shares the pose); with ``with_rgb=False`` the render's ``rgb`` is None (depth
-        and instances only)."""
-        cam = pinhole or self.camera.wide()
-        view = view_matrix_gl(cam_T_world)
-        s = self.camera.supersample
-        flags = p.ER_SEGMENTATION_MASK_OBJECT_AND_LINKINDEX
-        if s == 1:
-            rgb, depth_buf, seg = self._raw(cam.width_px, cam.height_px, view, cam.projection_matrix_gl(1), flags)
-        else:
-            # Anti-aliased colour from a supersampled render; exact depth/instance from an
-            # output-resolution render whose samples sit at the output pixel centres.
-            if with_rgb:
-                hi, _, hseg = self._raw(
-                    cam.width_px * s, cam.height_px * s, view, cam.projection_matrix_gl(s), p.ER_NO_SEGMENTATION_MASK
-                )
-                rgb = hi.reshape(cam.height_px, s, cam.width_px, s, 3).mean(axis=(1, 3)).round().astype(np.uint8)
-            _, depth_buf, seg = self._raw(cam.width_px, cam.height_px, view, cam.projection_matrix_gl(1), flags)
-        if not with_rgb:
-            rgb = None
-        obj = np.where(seg >= 0, seg & 0xFFFFFF, -1)
-        lut = self.instance_lut
-        instance = np.where(obj >= 0, lut[np.clip(obj, 0, len(lut) - 1)], -1).astype(np.int32)
-        part_lut = self.part_lut
-        part = None
-        if part_lut is not None:
-            part = np.where(obj >= 0, part_lut[np.clip(obj, 0, len(part_lut) - 1)], -1).astype(np.int32)
-        depth = cam.linear_depth(depth_buf)
-        depth[instance < 0] = cam.far_m
-        return Render(rgb=rgb, depth_m=depth, instance=instance, part=part)
-
-    def _raw(self, w: int, h: int, view, proj, flags):
-        _, _, rgba, depth, seg = self.client.getCameraImage(
-            w,
-            h,
-            view,
-            proj,
-            renderer=p.ER_TINY_RENDERER,
-            flags=flags,
-            shadow=0,
-            lightDirection=list(self.light_direction),
-            lightAmbientCoeff=0.6,
-            lightDiffuseCoeff=0.5,
-            lightSpecularCoeff=0.05,
-        )
-        rgb = np.asarray(rgba, np.uint8).reshape(h, w, 4)[..., :3].copy()
-        seg = np.asarray(seg, np.int64).reshape(h, w)
-        if flags != p.ER_NO_SEGMENTATION_MASK:
-            sky = seg < 0
-        else:
-            sky = np.asarray(depth).reshape(h, w) >= 1.0
-        if (h, w) not in self._sky:  # one per render size (each view, and supersampled renders)
-            self._sky[(h, w)] = textures.sky_gradient(h, w, h * 0.5)
-        rgb[sky] = self._sky[(h, w)][sky]
-        return rgb, np.asarray(depth, np.float32).reshape(h, w), seg
+        and instances only). See ``sim.world_render``."""
+        return render_view(self, cam_T_world, with_rgb, pinhole)
