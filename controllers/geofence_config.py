@@ -82,7 +82,7 @@ class GeofenceConfig:
     tracker: TrackerConfig = field(default_factory=TrackerConfig)  # fenced regions followed over jobs
     # [px] a view whose pair turned further than this (yaw rate x pair interval x focal length)
     # gives no evidence in that job: its flow leaves the estimator's range (a turn: 8 deg in 0.3 s)
-    max_rotation_px: float = 24.0
+    max_rotation_px: float = 12.0
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "thresholds_s", check_thresholds(self.thresholds_s))

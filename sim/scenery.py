@@ -152,25 +152,20 @@ CROSS_ROAD_M = 120.0  # [m] the cross road's length on each side of the main roa
 
 def _cross_road(m: _Builder, road: RoadConfig, asphalt, concrete, grass, white) -> None:
     """The cross road at x = junction_m: carriageway, centre line, sidewalks and verges on
-    both sides of the main road."""
-    J, hw, sw = road.junction_m, road.cross_half_width_m, road.sidewalk_m
+    both sides of the main road, in ``segment_m`` tiles along y (as the main road's, so
+    that its textures keep their scale)."""
+    J, hw, sw, seg = road.junction_m, road.cross_half_width_m, road.sidewalk_m, road.segment_m
     for side, edge in ((1, road.y_left_edge_m), (-1, road.y_right_edge_m)):
-        y_mid = edge + side * CROSS_ROAD_M / 2
-        m.box((J, y_mid, -0.05), (hw, CROSS_ROAD_M / 2, 0.05), asphalt)
+        for k in range(int(np.ceil(CROSS_ROAD_M / seg))):
+            y_mid = edge + side * (k + 0.5) * seg
+            m.box((J, y_mid, -0.05), (hw, seg / 2, 0.05), asphalt)
+            for xs in (1, -1):  # its sidewalks run on into the corners the main road's leave free
+                if sw > 0:
+                    m.box((J + xs * (hw + sw / 2), y_mid, -0.03), (sw / 2, seg / 2, 0.05), concrete)
+                    m.box((J + xs * (hw + 0.075), y_mid, 0.06), (0.075, seg / 2, 0.06), None, KERB_RGB)
+                m.box((J + xs * (hw + sw + 15.0), y_mid, -0.06), (15.0, seg / 2, 0.05), grass)
         for yd in np.arange(sw + 2.0, CROSS_ROAD_M, 12.0):
             m.box((J, edge + side * (yd + 1.5), 0.003), (0.075, 1.5, 0.003), None, white)
-        for xs in (1, -1):
-            if sw > 0:
-                m.box(
-                    (J + xs * (hw + sw / 2), y_mid + side * sw, -0.03), (sw / 2, CROSS_ROAD_M / 2 - sw, 0.05), concrete
-                )
-                m.box(
-                    (J + xs * (hw + 0.075), y_mid + side * sw, 0.06),
-                    (0.075, CROSS_ROAD_M / 2 - sw, 0.06),
-                    None,
-                    KERB_RGB,
-                )
-            m.box((J + xs * (hw + sw + 15.0), y_mid + side * sw, -0.06), (15.0, CROSS_ROAD_M / 2 - sw, 0.05), grass)
 
 
 def _roadside(m: _Builder, road: RoadConfig, rng: np.random.Generator, band=None) -> None:
