@@ -18,7 +18,7 @@ import cv2
 import numpy as np
 
 from controllers.base import Calibration
-from controllers.road import ground_depth_per_row
+from controllers.road import corridor_columns, ground_depth_per_row, ground_ttc_per_row
 
 
 def standing_regions(mask: np.ndarray, lowest_row: int, contact_px: int) -> tuple[int, np.ndarray]:
@@ -37,13 +37,13 @@ def standing_regions(mask: np.ndarray, lowest_row: int, contact_px: int) -> tupl
 def ground_ttc_map(cal: Calibration, speed_mps: float, yaw_rate_radps: float = 0.0) -> np.ndarray:
     """(H, W) camera-plane TTC [s] of the static ground seen at each pixel (+inf where it
     does not approach: above the horizon, at standstill)."""
+    if yaw_rate_radps == 0.0:  # straight on: every column of a row alike (controllers.road)
+        return np.repeat(ground_ttc_per_row(cal, speed_mps)[:, None], cal.width_px, axis=1)
     z = ground_depth_per_row(cal)[:, None]
-    closing = speed_mps * math.cos(math.radians(cal.pitch_deg))
-    if yaw_rate_radps == 0.0:
-        rate = np.full((1, cal.width_px), closing)
-    else:
-        x_over_z = (np.arange(cal.width_px, dtype=np.float64) - cal.cx_px) / cal.fx_px
-        rate = closing + yaw_rate_radps * np.where(np.isfinite(z), z, 0.0) * x_over_z[None, :]
+    x_over_z = (np.arange(cal.width_px, dtype=np.float64) - cal.cx_px) / cal.fx_px
+    rate = (
+        speed_mps * math.cos(math.radians(cal.pitch_deg)) + yaw_rate_radps * np.where(np.isfinite(z), z, 0.0) * x_over_z
+    )
     with np.errstate(divide="ignore", invalid="ignore"):
         return np.where((rate > 1e-6) & np.isfinite(z), z / np.maximum(rate, 1e-12), np.inf)
 
@@ -57,15 +57,10 @@ def counted_pixels(tau_ground: np.ndarray, tau_s: float, ground_margin: float) -
 
 def corridor_mask(cal: Calibration, counted: np.ndarray, half_w_m: float, depth_m: float, curvature: float):
     """(H, W) bool: the counted pixels in the columns of the ego's corridor at ``depth_m``
-    (its width plus margins, bent along the path of curvature ``curvature`` [1/m])."""
+    (its width plus margins, bent along the path of curvature ``curvature`` [1/m]:
+    centred on X_path / Z = -k Z / 2)."""
     out = np.zeros_like(counted)
-    if depth_m <= 1e-6:
-        out[:] = counted
-        return out
-    centre = cal.cx_px - cal.fx_px * curvature * depth_m / 2
-    half_px = cal.fx_px * half_w_m / depth_m
-    u0 = max(0, int(math.ceil(centre - half_px)))
-    u1 = min(cal.width_px - 1, int(math.floor(centre + half_px)))
+    u0, u1 = corridor_columns(cal, half_w_m, depth_m, cal.cx_px - cal.fx_px * curvature * depth_m / 2)
     if u1 >= u0:
         out[:, u0 : u1 + 1] = counted[:, u0 : u1 + 1]
     return out

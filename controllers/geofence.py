@@ -193,7 +193,7 @@ class GeofenceController(Controller):
             lowest = int(np.flatnonzero(bands[i].any(axis=1)).max())
             inside = maps[i] > c.prob_inside
             area, standing = standing_regions(inside & region, lowest, c.contact_px)
-            need = max(c.min_region_px, cal.fx_px * cal.fy_px * c.min_face_m2 / depth**2 if depth > 1e-6 else 0.0)
+            need = self._need_px(cal, depth)
             area_p, ahead = standing_regions(predicted & inside & bands[i], lowest, c.contact_px)
             if area_p > area:
                 area, standing = area_p, ahead
@@ -203,6 +203,11 @@ class GeofenceController(Controller):
             corridor |= region
         return sizes, counted, corridor, int(predicted.any())
 
+    def _need_px(self, cal: Calibration, depth_m: float) -> float:
+        """[px] the smallest standing region that counts at a fence's static depth (rule 4)."""
+        c = self.cfg
+        return max(c.min_region_px, cal.fx_px * cal.fy_px * c.min_face_m2 / depth_m**2 if depth_m > 1e-6 else 0.0)
+
     def _predicted(self, maps, thr, bands, view: str, speed_mps: float, yaw_rate: float, t_s: float) -> np.ndarray:
         """(H, W) bool: the regions of the largest fence, across the whole view, that the
         tracker predicts into the ego's path (``controllers.tracker``)."""
@@ -211,7 +216,7 @@ class GeofenceController(Controller):
         if not c.tracker.enabled or view not in c.tracker.views or not bands[-1].any():
             return out
         depth = static_depth_m(cal, speed_mps, thr[-1])
-        need = max(c.min_region_px, cal.fx_px * cal.fy_px * c.min_face_m2 / depth**2 if depth > 1e-6 else 0.0)
+        need = self._need_px(cal, depth)
         lowest = int(np.flatnonzero(bands[-1].any(axis=1)).max())
         inside = (maps[-1] > c.prob_inside) & bands[-1]
         blobs = fenced_blobs(inside, maps, thr, c.prob_inside, lowest, c.contact_px, need, self._ground_depth[view])

@@ -53,9 +53,13 @@ def static_depth_m(cal: Calibration, ego_speed_mps: float, tau_s: float) -> floa
     return ego_speed_mps * math.cos(math.radians(cal.pitch_deg)) * tau_s
 
 
-def corridor_columns(cal: Calibration, half_width_m: float, depth_m: float) -> tuple[int, int]:
-    """Inclusive column range [u0, u1] of the ego's corridor at ``depth_m`` (clipped to the image)."""
+def corridor_columns(
+    cal: Calibration, half_width_m: float, depth_m: float, centre_px: float | None = None
+) -> tuple[int, int]:
+    """Inclusive column range [u0, u1] of the ego's corridor at ``depth_m`` (clipped to the
+    image), centred on column ``centre_px`` (default the principal point: straight ahead)."""
+    centre = cal.cx_px if centre_px is None else centre_px
     half_px = cal.fx_px * half_width_m / max(depth_m, 1e-6)
-    u0 = max(0, int(math.ceil(cal.cx_px - half_px)))
-    u1 = min(cal.width_px - 1, int(math.floor(cal.cx_px + half_px)))
+    u0 = max(0, int(math.ceil(centre - half_px)))
+    u1 = min(cal.width_px - 1, int(math.floor(centre + half_px)))
     return u0, u1

@@ -100,6 +100,11 @@ class _Obs:
     speed_mps: float
     pose: tuple[float, float, float]  # odometry (x, y, psi) at t
 
+    def inner_bearing(self, cal: Calibration) -> float:
+        """x / z of the region's inner edge (its column nearest the image centre)."""
+        inner = self.u_right if self.u_right < cal.cx_px else self.u_left
+        return (inner - cal.cx_px) / cal.fx_px
+
 
 @dataclass
 class Track:
@@ -185,9 +190,8 @@ class BlobTracker:
         for o in tr.obs:
             if o.u_left <= cal.cx_px <= o.u_right or o.u_left <= 0 or o.u_right >= cal.width_px - 1:
                 return None
-            inner = o.u_right if o.u_right < cal.cx_px else o.u_left
             z = max(o.speed_mps * cos_p * max(t0 - o.t_s, c.min_ttc_s), o.contact_depth_m or 0.0, 0.5)
-            fwd, left = z + cal.mount_forward_m, -(inner - cal.cx_px) / cal.fx_px * z
+            fwd, left = z + cal.mount_forward_m, -o.inner_bearing(cal) * z
             x, y, psi = o.pose
             pts.append((x + fwd * math.cos(psi) - left * math.sin(psi), y + fwd * math.sin(psi) + left * math.cos(psi)))
             ts.append(o.t_s)
@@ -203,8 +207,7 @@ class BlobTracker:
         ts, dist = [], []
         psi0 = tr.obs[0].pose[2]
         for o in tr.obs:
-            inner = o.u_right if o.u_right < cal.cx_px else o.u_left
-            bearing = (inner - cal.cx_px) / cal.fx_px - (o.pose[2] - psi0)  # turning left moves the world right
+            bearing = o.inner_bearing(cal) - (o.pose[2] - psi0)  # turning left moves the world right
             ts.append(o.t_s)
             dist.append(abs(bearing))
         ts = np.asarray(ts) - ts[0]

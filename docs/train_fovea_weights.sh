@@ -32,6 +32,5 @@ fi
 bittc train --data "$DATA6" --config cpu-small-corr --stage binary --steps "$FOVEA_STEPS" --seed 60 --lr 1e-4 \
     --val-every 500 --val-limit 256 --lovasz-weight 0.5 --actor-weight 2 --inpath-weight 4 --lr-mult segnet.corr_=10 \
     --init "$START" --out "$OUT/binary.pt"
-bittc train --data "$DATA6" --config cpu-small-corr --stage continuous --freeze-binary --steps "$CONT_STEPS" \
-    --warmup-steps 50 --seed 0 --lr 2e-4 --val-every 125 --init "$OUT/binary.pt" --out "$OUT/continuous.pt"
+continuous_stage "$DATA6" "$OUT"
 finish_release "$START" "$OUT" "$RELEASE"

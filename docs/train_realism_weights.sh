@@ -24,10 +24,4 @@ CONT_STEPS=${CONT_STEPS:-250}
 START=${START:-bittc_core/weights/bittc_default.pt}
 mkdir -p "$OUT"
 source "$(dirname "$0")/release_steps.sh"
-cp "$START" "$OUT/start.pt"  # the start as it was, whatever SHIP later replaces
-bittc train --data "$DATA7" --config cpu-small-corr --stage binary --steps "$BINARY_STEPS" --seed 70 --lr 5e-5 \
-    --warmup-steps 100 --val-every 500 --val-limit 256 --lovasz-weight 0.5 --actor-weight 2 --inpath-weight 4 \
-    --lr-mult segnet.corr_=10 --init "$OUT/start.pt" --out "$OUT/binary.pt"
-bittc train --data "$DATA7" --config cpu-small-corr --stage continuous --freeze-binary --steps "$CONT_STEPS" \
-    --warmup-steps 50 --seed 0 --lr 2e-4 --val-every 125 --init "$OUT/binary.pt" --out "$OUT/continuous.pt"
-finish_release "$OUT/start.pt" "$OUT" "$RELEASE"
+finetune_release "$DATA7" "$OUT" "$RELEASE" 70

@@ -50,11 +50,6 @@ class EgoPath:
             return math.inf
         return self.junction_x_m + self.sign * self.lane_width_m / 2 - self.radius_m
 
-    @property
-    def curvature_1pm(self) -> float:
-        """[1/m] signed curvature of the arc (+ turning left)."""
-        return self.sign / self.radius_m
-
     def pose_at(self, s_m: float) -> tuple[float, float, float]:
         """(x, y, heading) of the ego's centre after ``s_m`` metres along the path."""
         s0 = self.turn_start_s
@@ -66,10 +61,6 @@ class EgoPath:
             th = (s_m - s0) / R
             return s0 + R * math.sin(th), k * R * (1 - math.cos(th)), k * th
         return s0 + R, k * (R + (s_m - s0 - arc)), k * math.pi / 2
-
-    def curvature_at(self, s_m: float) -> float:
-        s0 = self.turn_start_s
-        return self.curvature_1pm if s0 < s_m <= s0 + self.radius_m * math.pi / 2 else 0.0
 
     def closest_s(self, x_m: float, y_m: float) -> float:
         """Path length [m] of the path's point nearest (x, y) (the first straight, the arc

@@ -28,7 +28,7 @@ from sim.stepping import capture_pose, pair_ground_truth, step_traffic, substeps
 from sim.textures import TextureStyle
 from sim.traffic import ActuatorConfig, EgoVehicle, ScriptedVehicle, TrafficVehicle, build_road
 from sim.vehicles import EGO_SIZE_M, footprints_overlap, sample_spec
-from sim.vru import part_poses, vru_spec
+from sim.vru import vru_spec
 
 __all__ = ["Collision", "Frame", "ScenarioSim", "StepTruth", "overlap_offset_m"]
 
@@ -192,9 +192,7 @@ class ScenarioSim:
         part_T: dict[int, np.ndarray] = {}
         for a in self.actors:
             if a.is_vru:
-                Ts = part_poses(a.spec, poses[a.instance], a.vehicle.travelled_m)
-                self.world.set_part_poses(a.instance, Ts)
-                part_T.update(zip(a.part_ids, Ts))
+                part_T.update(self.world.pose_vru(a.instance, a.spec, poses[a.instance], a.vehicle.travelled_m))
             else:
                 self.world.set_vehicle_pose(a.instance, *poses[a.instance])
         r = self.world.render(cam_T_world)

@@ -15,7 +15,7 @@ from scenarios.spec import ActorSpec, ScenarioCase, VruActorSpec
 from scenarios.vru_spec import STOP_DECEL_MPS2, vru_placement
 from sim.actor_truth import ActorTruth, actor_truth
 from sim.episode_placement import actor_placement, overlap_offset_m
-from sim.path_truth import path_truth
+from sim.path_truth import EgoFuture, path_truth
 from sim.vehicles import EGO_SIZE_M, VehicleSpec
 from sim.vru import VruSpec
 from sim.walkers import Walker
@@ -99,19 +99,8 @@ def actor_truths(sim) -> list[ActorTruth]:
     (``sim.actor_truth``)."""
     ego_pose = sim.ego.world_pose()
     if sim.case.open_paths:  # contact from both exact futures (sim.path_truth)
-        return [
-            path_truth(
-                a.instance,
-                sim.path,
-                ego_pose,
-                EGO_SIZE_M[:2],
-                float(sim.ego.speed),
-                a.vehicle,
-                (a.spec.length_m, a.spec.width_m),
-                sim.t_s,
-            )
-            for a in sim.actors
-        ]
+        ego = EgoFuture(sim.path, ego_pose, EGO_SIZE_M[:2], float(sim.ego.speed))
+        return [path_truth(a.instance, ego, a.vehicle, (a.spec.length_m, a.spec.width_m), sim.t_s) for a in sim.actors]
     return [
         actor_truth(
             a.instance,

@@ -25,6 +25,7 @@ import math
 import numpy as np
 
 from sim.actor_truth import ActorTruth
+from sim.vehicles import footprint_corners_many, footprints_overlap_many
 
 HORIZON_S = 6.0  # [s] how far ahead contacts are predicted
 STEP_S = 0.02  # [s]
@@ -33,38 +34,29 @@ BRAKE_DELAY_S = 0.1 + 0.15  # [s] the actuator's delay plus half its build-up to
 FULL_DECEL_MPS2 = 9.0  # [m/s^2]
 
 
-def rectangles(x, y, heading, length_m: float, width_m: float) -> np.ndarray:
-    """(N, 4, 2) corners of N oriented rectangles."""
-    c, s = np.cos(heading), np.sin(heading)
-    local = np.array([[1, 1], [1, -1], [-1, -1], [-1, 1]]) * [length_m / 2, width_m / 2]
-    R = np.stack([np.stack([c, -s], -1), np.stack([s, c], -1)], -2)  # (N, 2, 2)
-    return np.einsum("nij,kj->nki", R, local) + np.stack([x, y], -1)[:, None, :]
+class EgoFuture:
+    """The ego's footprints over the horizon from its state now, shared by every actor's
+    truth: at constant speed along its path, and (``braked``, computed when first asked)
+    braking fully from ``BRAKE_LEAD_S`` + ``BRAKE_DELAY_S`` on."""
 
+    def __init__(self, path, ego_pose, ego_size_m, speed_mps: float) -> None:
+        self.times = np.arange(0.0, HORIZON_S + 1e-9, STEP_S)
+        self.pose, self.size_m, self.speed_mps = ego_pose, ego_size_m, speed_mps
+        self._path, self._s0 = path, path.closest_s(ego_pose[0], ego_pose[1])
+        self.rects = self._footprints(speed_mps * self.times)
+        self._braked: np.ndarray | None = None
 
-def overlapping(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """(N,) bool: rectangle a[n] overlaps b[n] (separating-axis test on both edge sets)."""
-    out = np.ones(len(a), dtype=bool)
-    for poly in (a, b):
-        edges = np.roll(poly, -1, axis=1) - poly  # (N, 4, 2)
-        axes = np.stack([-edges[..., 1], edges[..., 0]], -1)  # (N, 4, 2)
-        pa = np.einsum("nkd,njd->nkj", axes, a)
-        pb = np.einsum("nkd,njd->nkj", axes, b)
-        sep = (pa.max(-1) < pb.min(-1)) | (pb.max(-1) < pa.min(-1))
-        out &= ~sep.any(-1)
-    return out
+    @property
+    def braked(self) -> np.ndarray:
+        if self._braked is None:
+            v, t_b = self.speed_mps, BRAKE_LEAD_S + BRAKE_DELAY_S
+            tb = np.clip(self.times - t_b, 0.0, v / FULL_DECEL_MPS2)
+            self._braked = self._footprints(v * np.minimum(self.times, t_b) + v * tb - 0.5 * FULL_DECEL_MPS2 * tb**2)
+        return self._braked
 
-
-def ego_future(path, ego_pose, speed_mps: float, times: np.ndarray, brake_from_s: float | None = None):
-    """(x, y, heading) arrays of the ego along ``path`` after ``times`` [s]: at constant speed,
-    or braking at ``FULL_DECEL_MPS2`` from ``brake_from_s`` [s] on until it stops."""
-    s0 = path.closest_s(ego_pose[0], ego_pose[1])
-    if brake_from_s is None:
-        dist = speed_mps * times
-    else:
-        tb = np.clip(times - brake_from_s, 0.0, speed_mps / FULL_DECEL_MPS2)
-        dist = speed_mps * np.minimum(times, brake_from_s) + speed_mps * tb - 0.5 * FULL_DECEL_MPS2 * tb**2
-    poses = np.array([path.pose_at(s0 + d) for d in dist])
-    return poses[:, 0], poses[:, 1], poses[:, 2]
+    def _footprints(self, dist_m: np.ndarray) -> np.ndarray:
+        poses = np.array([self._path.pose_at(self._s0 + d) for d in dist_m])
+        return footprint_corners_many(poses[:, 0], poses[:, 1], poses[:, 2], *self.size_m)
 
 
 def actor_future(vehicle, t_now_s: float, times: np.ndarray) -> tuple[np.ndarray, ...]:
@@ -78,33 +70,19 @@ def actor_future(vehicle, t_now_s: float, times: np.ndarray) -> tuple[np.ndarray
     return x + vx * times, y + vy * times, np.full_like(times, h)
 
 
-def path_truth(
-    instance: int,
-    path,
-    ego_pose,
-    ego_size_m,
-    ego_speed_mps: float,
-    vehicle,
-    actor_size_m,
-    t_now_s: float,
-) -> ActorTruth:
+def path_truth(instance: int, ego: EgoFuture, vehicle, actor_size_m, t_now_s: float) -> ActorTruth:
     """Truth of one actor from both exact futures (see the module docstring)."""
-    times = np.arange(0.0, HORIZON_S + 1e-9, STEP_S)
-    ex, ey, eh = ego_future(path, ego_pose, ego_speed_mps, times)
-    ax, ay, ah = actor_future(vehicle, t_now_s, times)
-    actor = rectangles(ax, ay, ah, *actor_size_m)
-    hit = overlapping(rectangles(ex, ey, eh, *ego_size_m), actor)
+    times = ego.times
+    actor = footprint_corners_many(*actor_future(vehicle, t_now_s, times), *actor_size_m)
+    hit = footprints_overlap_many(ego.rects, actor)
     ttc = float(times[np.argmax(hit)]) if hit.any() else math.inf
-    must = False
-    if math.isfinite(ttc) and ego_speed_mps > 0:
-        bx, by, bh = ego_future(path, ego_pose, ego_speed_mps, times, BRAKE_LEAD_S + BRAKE_DELAY_S)
-        must = bool(overlapping(rectangles(bx, by, bh, *ego_size_m), actor).any())
-    heading = ego_pose[2]
+    must = math.isfinite(ttc) and ego.speed_mps > 0 and bool(footprints_overlap_many(ego.braked, actor).any())
+    heading = ego.pose[2]
     along = np.array([math.cos(heading), math.sin(heading)])
-    rel = np.array(vehicle.world_pose()[:2]) - np.array(ego_pose[:2])
+    rel = np.array(vehicle.world_pose()[:2]) - np.array(ego.pose[:2])
     lateral = float(rel @ np.array([-along[1], along[0]]))
-    closing = ego_speed_mps - float(np.asarray(vehicle.world_velocity()) @ along)
+    closing = ego.speed_mps - float(np.asarray(vehicle.world_velocity()) @ along)
     in_path = math.isfinite(ttc)
     ahead = in_path or float(rel @ along) > 0
-    gap = closing * ttc if in_path else float(rel @ along) - ego_size_m[0] / 2
+    gap = closing * ttc if in_path else float(rel @ along) - ego.size_m[0] / 2
     return ActorTruth(instance, float(gap), lateral, float(closing), ttc, in_path, bool(ahead), must)

@@ -10,7 +10,6 @@ import numpy as np
 from sim.camera import Pinhole
 from sim.random_scene_draw import SceneDraw
 from sim.stepping import capture_pose, step_traffic
-from sim.vru import part_poses
 from sim.world import World
 
 
@@ -33,11 +32,9 @@ def render_frames(
         for inst, pose in poses.items():
             world.set_vehicle_pose(inst, *pose)
         part_T = {}
-        for inst, spec, walker, _, part_ids, gait_m in vrus:
+        for inst, spec, walker, _, gait_m in vrus:
             poses[inst] = walker.world_pose()
-            Ts = part_poses(spec, poses[inst], walker.travelled_m + gait_m)
-            world.set_part_poses(inst, Ts)
-            part_T.update(zip(part_ids, Ts))
+            part_T.update(world.pose_vru(inst, spec, poses[inst], walker.travelled_m + gait_m))
         ex, ey, eh = ego.world_pose()
         cam_T_world = capture_pose(scene.camera, rng, (ex, ey, eh))
         r = world.render(cam_T_world, pinhole=view)
@@ -96,7 +93,7 @@ def clip_meta(sample_seed: int, scene: SceneDraw, view: Pinhole, actors, states,
         ]
         + [
             {"instance": inst, "kind": spec.kind, "class": spec.cls, "height_m": spec.height_m, "motion": motion}
-            for inst, spec, _, motion, _, _ in vrus
+            for inst, spec, _, motion, _ in vrus
         ],
         "frames": states,
     }

@@ -60,13 +60,13 @@ def draw_vru(rng: np.random.Generator, scene: SceneDraw, kind: str):
 
 
 def place_vrus(rng: np.random.Generator, world, scene: SceneDraw) -> list:
-    """-> [(instance, spec, walker, motion, part ids, gait offset [m])] of 2-MAX_VRUS road users."""
+    """-> [(instance, spec, walker, motion, gait offset [m])] of 2-MAX_VRUS road users."""
     out = []
     for _ in range(int(rng.integers(2, MAX_VRUS + 1))):
         kind = str(rng.choice(VRU_KINDS))
         spec = vru_spec(kind, rng)
         x, y, heading, speed, start_s, motion = draw_vru(rng, scene, kind)
         walker = Walker(x, y, heading, speed, spec.length_m, spec.width_m, start_s=start_s)
-        instance, part_ids = world.add_vru(spec)
-        out.append((instance, spec, walker, motion, part_ids, float(rng.uniform(0.0, 2.0))))
+        instance, _ = world.add_vru(spec)
+        out.append((instance, spec, walker, motion, float(rng.uniform(0.0, 2.0))))
     return out

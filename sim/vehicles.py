@@ -119,12 +119,23 @@ def parts(spec: VehicleSpec) -> list[Part]:
     return out
 
 
+_CORNERS = np.array([[1, 1], [1, -1], [-1, -1], [-1, 1]])  # a footprint's corners in half extents, in order
+
+
 def footprint_corners(x_m: float, y_m: float, heading_rad: float, length_m: float, width_m: float) -> np.ndarray:
     """(4, 2) corners of an oriented footprint rectangle in the world plane."""
     c, s = math.cos(heading_rad), math.sin(heading_rad)
-    local = np.array([[1, 1], [1, -1], [-1, -1], [-1, 1]]) * [length_m / 2, width_m / 2]
+    local = _CORNERS * [length_m / 2, width_m / 2]
     R = np.array([[c, -s], [s, c]])
     return local @ R.T + [x_m, y_m]
+
+
+def footprint_corners_many(x_m, y_m, heading_rad, length_m: float, width_m: float) -> np.ndarray:
+    """(N, 4, 2): ``footprint_corners`` of N poses at once ((N,) arrays), one footprint size."""
+    c, s = np.cos(heading_rad), np.sin(heading_rad)
+    local = _CORNERS * [length_m / 2, width_m / 2]
+    R = np.stack([np.stack([c, -s], -1), np.stack([s, c], -1)], -2)  # (N, 2, 2)
+    return np.einsum("nij,kj->nki", R, local) + np.stack([x_m, y_m], -1)[:, None, :]
 
 
 def footprints_overlap(a: np.ndarray, b: np.ndarray) -> bool:
@@ -137,3 +148,15 @@ def footprints_overlap(a: np.ndarray, b: np.ndarray) -> bool:
             if pa.max() < pb.min() or pb.max() < pa.min():
                 return False
     return True
+
+
+def footprints_overlap_many(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """(N,) bool: ``footprints_overlap`` of N pairs of (N, 4, 2) footprints at once."""
+    out = np.ones(len(a), dtype=bool)
+    for poly in (a, b):
+        edges = np.roll(poly, -1, axis=1) - poly  # (N, 4, 2)
+        axes = np.stack([-edges[..., 1], edges[..., 0]], -1)  # (N, 4, 2)
+        pa = np.einsum("nkd,njd->nkj", axes, a)
+        pb = np.einsum("nkd,njd->nkj", axes, b)
+        out &= ~((pa.max(-1) < pb.min(-1)) | (pb.max(-1) < pa.min(-1))).any(-1)
+    return out

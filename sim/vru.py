@@ -22,11 +22,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from scenarios.road_users import (  # noqa: F401  (re-exported)
+from scenarios.road_users import (  # noqa: F401  (ADULT_HEIGHT_M, BICYCLE_LENGTH_M re-exported)
     ADULT_HEIGHT_M,
     BICYCLE_LENGTH_M,
-    CHILD_HEIGHT_M,
-    CYCLIST_HEIGHT_M,
     DEFAULT_HEIGHT_M,
     VRU_CLASS,
     VRU_KINDS,

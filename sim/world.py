@@ -37,7 +37,7 @@ from sim.bodies import create_part_body, create_static_bodies, create_vehicle_bo
 from sim.camera import CameraConfig, Pinhole
 from sim.scenery import RoadConfig, Scenery, StaticShape, build_scenery
 from sim.vehicles import VehicleSpec
-from sim.vru import VruSpec, parts
+from sim.vru import VruSpec, part_poses, parts
 from sim.world_render import Render, render_view  # noqa: F401  (Render re-exported)
 
 PART_ID_BASE = 1 << 20  # part ids of road users' rigid parts start here (instances stay below)
@@ -232,6 +232,14 @@ class World:
         for (_, uid), T in zip(entries, world_T_parts):
             q = quat_from_matrix(np.asarray(T)[:3, :3])
             self.client.resetBasePositionAndOrientation(uid, [float(v) for v in T[:3, 3]], q)
+
+    def pose_vru(self, instance: int, spec: VruSpec, pose, travelled_m: float) -> dict[int, np.ndarray]:
+        """Place road user ``instance`` of ``spec`` at planar ``pose`` (x, y, heading) having
+        travelled ``travelled_m`` [m] (its gait phase, its wheels' angle); -> part id ->
+        world_T_part (4x4, ``sim.vru.part_poses``), what its ground truth moves with."""
+        Ts = part_poses(spec, pose, travelled_m)
+        self.set_part_poses(instance, Ts)
+        return {pid: T for (pid, _), T in zip(self._vru_parts[instance], Ts)}
 
     def set_vehicle_pose(self, instance: int, x_m: float, y_m: float, heading_rad: float) -> None:
         """Place a vehicle: footprint centre (x, y) on the ground, heading about z [rad]."""
