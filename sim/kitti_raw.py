@@ -6,7 +6,8 @@ Files (a synced KITTI raw drive; ``oxts`` optional)::
     calib_velo_to_cam.txt    R (3x3), T (3) [m]: velodyne -> camera 0 (unrectified)
     image_02/data/NNNNNNNNNN.png, image_02/timestamps.txt
     velodyne_points/data/NNNNNNNNNN.bin, velodyne_points/timestamps.txt
-    oxts/data/NNNNNNNNNN.txt  30 numbers per frame; index 8 is vf, the forward speed [m/s]
+    oxts/data/NNNNNNNNNN.txt  30 numbers per frame; index 8 is vf, the forward speed [m/s],
+                              index 19 wz, the yaw rate [rad/s] (z up: + turning left)
 
 Conventions (KITTI's): camera x right, y down, z forward; velodyne x forward, y left, z up;
 a velodyne point X projects to the image as P_rect_02 R_rect_00 (R X + T). A velodyne file
@@ -32,6 +33,7 @@ VELODYNE = "velodyne_points"
 OXTS = "oxts"
 OXTS_FIELDS = 30  # numbers per oxts line
 OXTS_VF = 8  # index of the forward speed [m/s]
+OXTS_WZ = 19  # index of the angular rate about the up axis [rad/s], + turning left
 EPOCH = datetime(2026, 1, 1)  # the date an export's timestamps count from
 
 
@@ -112,21 +114,36 @@ def read_drive(folder: str | Path) -> KittiDrive:
             read_scan(p)  # raises, naming the file
     speed = None
     if (folder / OXTS / "data").is_dir():
-        files = _frames(folder, OXTS, ".txt")
-        if len(files) != len(times):
-            raise FootageError(f"drive {str(folder)!r}: {len(files)} oxts files for {len(times)} frames")
-        speed = np.array([_oxts_speed(p) for p in files])
+        speed = read_oxts(folder / OXTS, len(times))[0]
     return KittiDrive(folder, cam["P_rect_02"].reshape(3, 4), rect @ rt, images, scans, times, speed)
 
 
-def _oxts_speed(path: Path) -> float:
+def read_oxts(folder: str | Path, frames: int) -> tuple[np.ndarray, np.ndarray]:
+    """A KITTI ``oxts`` folder (its ``data/*.txt``, or that ``data`` folder itself) of a clip
+    of ``frames`` frames -> (forward speed vf [m/s], yaw rate wz [rad/s], + left), each (N,).
+    A count that differs from the frames', a line of the wrong length or a value that is not
+    a number is refused, naming the file."""
+    folder = Path(folder)
+    data = folder / "data" if (folder / "data").is_dir() else folder
+    if not data.is_dir():
+        raise FootageError(f"oxts {str(folder)!r}: no such folder (a KITTI drive's oxts, holding data/*.txt)")
+    files = sorted(data.glob("*.txt"))
+    if len(files) != frames:
+        raise FootageError(f"oxts {str(folder)!r}: {len(files)} oxts files for {frames} frames")
+    rows = np.array([_oxts_values(p) for p in files]).reshape(len(files), OXTS_FIELDS)
+    return rows[:, OXTS_VF], rows[:, OXTS_WZ]
+
+
+def _oxts_values(path: Path) -> list[float]:
     try:
         values = [float(x) for x in path.read_text().split()]
     except ValueError:
         raise FootageError(f"oxts {str(path)!r}: holds a value that is not a number") from None
     if len(values) != OXTS_FIELDS:
         raise FootageError(f"oxts {str(path)!r}: {len(values)} numbers, expected {OXTS_FIELDS}")
-    return values[OXTS_VF]
+    if not np.isfinite(values).all():
+        raise FootageError(f"oxts {str(path)!r}: holds a value that is not finite")
+    return values
 
 
 def timestamp_lines(times_s) -> str:
@@ -149,7 +166,7 @@ def calib_texts(fx: float, fy: float, cx: float, cy: float, size_wh, velo_to_cam
     return {CALIB_CAM: cam, CALIB_VELO: velo}
 
 
-def oxts_line(forward_speed_mps: float) -> str:
+def oxts_line(forward_speed_mps: float, yaw_rate_radps: float = 0.0) -> str:
     values = np.zeros(OXTS_FIELDS)
-    values[OXTS_VF] = forward_speed_mps
+    values[OXTS_VF], values[OXTS_WZ] = forward_speed_mps, yaw_rate_radps
     return " ".join(f"{v:g}" for v in values) + "\n"

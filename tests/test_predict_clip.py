@@ -114,6 +114,31 @@ def test_a_folder_of_frames_with_timestamps_and_the_controller(clip, tmp_path):
     assert sorted(p.name for p in out.iterdir()) == ["frames.csv", "overlay.mp4", "prediction.json"]
 
 
+def test_the_controller_takes_the_ego_motion_of_each_frame_from_oxts(clip, tmp_path, capsys):
+    from sim.kitti_raw import oxts_line
+
+    d, frames, cam = clip
+    oxts = tmp_path / "oxts" / "data"
+    oxts.mkdir(parents=True)
+    speed = [30 / 3.6 - 0.05 * i for i in range(24)]  # braking: the speed of every frame differs
+    for i, v in enumerate(speed):
+        (oxts / f"{i:010d}.txt").write_text(oxts_line(v, 0.01 * i))
+    args = ["predict", str(d / "frames"), "--timestamps", str(d / "timestamps.txt"), "--calib", str(d / "calib.txt")]
+    args += ["--size", "96x288", "--fovea", "off", "--pitch", str(cam.pitch_deg), "--controller", "geofence"]
+    out = tmp_path / "out"
+    assert main([*args, "--oxts", str(oxts.parent), "--out", str(out)]) == 0
+    rows = _rows(out / "frames.csv")
+    assert [float(r["ego_speed_mps"]) for r in rows] == pytest.approx(speed[9:], abs=1e-4)
+    assert [float(r["ego_yaw_rate_radps"]) for r in rows] == pytest.approx([0.01 * i for i in range(9, 24)], abs=1e-5)
+    assert json.loads((out / "prediction.json").read_text())["controller"]["ego_motion"] == "oxts"
+    (oxts / f"{23:010d}.txt").unlink()  # one frame without its oxts file
+    bad = tmp_path / "bad"
+    assert main([*args, "--oxts", str(oxts.parent), "--out", str(bad)]) == 2
+    err = capsys.readouterr().err
+    assert "--oxts" in err and "23 oxts files for 24 frames" in err
+    assert not bad.exists()
+
+
 def test_a_video_at_its_own_frame_rate_with_a_region(clip, tmp_path):
     d, frames, _ = clip
     video = tmp_path / "clip.mp4"

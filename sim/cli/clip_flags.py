@@ -14,6 +14,7 @@ CLIP_ONLY_FLAGS = {
     "roi": "--roi",
     "controller": "--controller",
     "ego_speed": "--ego-speed",
+    "oxts": "--oxts",
     "calib": "--calib",
     "fx": "--fx",
     "fy": "--fy",
@@ -37,7 +38,13 @@ def add_clip_flags(p) -> None:
         "--roi", type=int, nargs=4, default=None, metavar=("U0", "V0", "U1", "V1"), help="a region [native px]"
     )
     g.add_argument("--controller", default=None, choices=("geofence",), help="run the geofence controller open loop")
-    g.add_argument("--ego-speed", type=float, default=None, metavar="MPS", help="the ego's speed [m/s]")
+    g.add_argument("--ego-speed", type=float, default=None, metavar="MPS", help="the ego's speed [m/s], constant")
+    g.add_argument(
+        "--oxts",
+        default=None,
+        metavar="DIR",
+        help="the ego's speed and yaw rate per frame from a KITTI drive's oxts folder (vf, wz), one file a frame",
+    )
     g.add_argument("--calib", default=None, metavar="FILE", help="a KITTI calib_cam_to_cam.txt (P_rect_02)")
     for name in ("fx", "fy", "cx", "cy"):
         g.add_argument(
@@ -86,14 +93,18 @@ def check(args, size, zoom):
         if u1 <= u0 or v1 <= v0 or min(u0, v0) < 0:
             raise CliError(f"--roi {u0} {v0} {u1} {v1}: needs 0 <= U0 < U1 and 0 <= V0 < V1 [native px]")
     if args.controller is not None:
-        if args.ego_speed is None or not (np.isfinite(args.ego_speed) and args.ego_speed >= 0):
-            raise CliError(f"--ego-speed {args.ego_speed}: --controller geofence needs the ego's speed >= 0 [m/s]")
+        if args.ego_speed is not None and args.oxts is not None:
+            raise CliError("--ego-speed and --oxts: give one source of the ego's speed")
+        if args.oxts is None and (args.ego_speed is None or not (np.isfinite(args.ego_speed) and args.ego_speed >= 0)):
+            raise CliError(
+                f"--ego-speed {args.ego_speed}: --controller geofence needs the ego's speed >= 0 [m/s] (or --oxts DIR)"
+            )
         if args.method != "bittc":
             raise CliError(f"--controller geofence runs the network (--method bittc), not {args.method!r}")
         if size is None:
             raise CliError("--controller geofence needs --size HxW: the network's size")
-    elif args.ego_speed is not None:
-        raise CliError("--ego-speed applies with --controller geofence")
+    elif args.ego_speed is not None or args.oxts is not None:
+        raise CliError(f"{'--ego-speed' if args.ego_speed is not None else '--oxts'} applies with --controller geofence")
     if not (np.isfinite(args.camera_height) and args.camera_height > 0):
         raise CliError(f"--camera-height {args.camera_height:g}: must be > 0 [m]")
     if not -30 <= args.pitch <= 30:

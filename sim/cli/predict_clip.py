@@ -15,7 +15,8 @@ capture time. Writes into DIR, each file whole or not at all:
   (``wide_inside_<tau>s``, ``fovea_inside_<tau>s``) and over ``--roi``
   (``wide_roi_inside_<tau>s``, ...; empty where the region misses the view); with
   ``--controller geofence``: ``stage``, ``warning``, ``decel_mps2``, ``fence_fired_s``,
-  ``fired_view``;
+  ``fired_view``, and the ego's motion it was given (``ego_speed_mps``,
+  ``ego_yaw_rate_radps``);
 * ``prediction.json``: the settings, the clip, the pairing, the views' crops and
   calibrations, the wall time and its ratio to the clip's duration.
 
@@ -23,7 +24,9 @@ Calibration (``--fx --fy --cx --cy`` [native px], or ``--calib`` a KITTI
 ``calib_cam_to_cam.txt``): the fovea becomes the crop in which a fovea pixel spans the
 angle it spans in training (``sim.footage_camera``), centred on the horizon point ahead
 (``--pitch``). ``--controller geofence`` runs the geofence controller open loop on the
-footage (it needs the calibration and ``--ego-speed``). Its persistence and release,
+footage (it needs the calibration and the ego's motion: ``--ego-speed`` constant, or
+``--oxts DIR`` a KITTI drive's oxts folder, one file a frame: speed vf and yaw rate wz of
+the pair's latest frame). Its persistence and release,
 counted in jobs at the simulator's 10 Hz, are scaled to the footage's rate, so they span
 the same time.
 """
@@ -90,6 +93,7 @@ class _ClipRun:
     rois: dict
     ctrl: object = None
     calibration: object = None
+    motion: tuple | None = None  # per frame (speed [m/s], yaw rate [rad/s], + left) from --oxts
     first: dict = field(default_factory=lambda: {"warning": None, "brake": None})
 
 
@@ -128,6 +132,13 @@ def _prepare(args, size, zoom) -> _ClipRun:
     rois = {v: roi_in_view(args.roi, box, hw) for v, (box, hw) in views.items()}
     step = float(np.median(np.diff(clip.times_s)))
     run = _ClipRun(args, clip, est, views, cams, stride, est.dt_s * stride, partner, step, thr, thr_est, rois)
+    if args.oxts is not None:
+        from sim.kitti_raw import read_oxts
+
+        try:
+            run.motion = read_oxts(args.oxts, len(clip.times_s))
+        except FootageError as e:
+            raise CliError(f"--oxts {args.oxts!r}: {e}") from None
     if args.controller:
         ratio = max(int(round(est.dt_s / step)), 1)  # jobs per simulator job (10 Hz)
         run.ctrl, run.calibration = _controller(args, est, thr, views, cams, stride, ratio)
@@ -142,16 +153,19 @@ def _fence_columns(row: dict, view: str, thresholds, maps, roi, with_roi: bool) 
             row[f"{view}_roi_inside_{t:g}s"] = "" if b is None else round(b, 6)
 
 
-def _controller_step(run: _ClipRun, row: dict, now: dict, before: dict, t_s: float):
-    """One job of the controller on the pair -> (pictures, HUD lines, alert); fills ``row``."""
+def _controller_step(run: _ClipRun, row: dict, now: dict, before: dict, t_s: float, i: int):
+    """One job of the controller on the pair ending at frame ``i`` -> (pictures, HUD lines,
+    alert); fills ``row``."""
     from controllers.base import Observation
     from sim.video import geofence_overlay
 
     a = run.args
+    speed, yaw = (float(run.motion[0][i]), float(run.motion[1][i])) if run.motion else (float(a.ego_speed), 0.0)
     obs = Observation(
-        t_s, float(a.ego_speed), now["wide"], before["wide"], run.pair_dt_s, run.calibration,
-        now.get("fovea"), before.get("fovea"),
+        t_s, speed, now["wide"], before["wide"], run.pair_dt_s, run.calibration,
+        now.get("fovea"), before.get("fovea"), ego_yaw_rate_radps=yaw,
     )  # fmt: skip
+    row |= {"ego_speed_mps": round(speed, 4), "ego_yaw_rate_radps": round(yaw, 5)}
     cmd = run.ctrl.act(obs, None)
     tel = cmd.telemetry
     pictures = []
@@ -209,7 +223,7 @@ def _frame_loop(run: _ClipRun, video) -> list[dict]:
         row = {"frame": i, "t_s": round(float(times[i]), 6), "prev_frame": j}
         row["pair_dt_s"] = round(float(times[i] - times[j]), 6)
         if run.ctrl is not None:
-            pictures, lines, alert = _controller_step(run, row, kept[i], kept[j], float(times[i]))
+            pictures, lines, alert = _controller_step(run, row, kept[i], kept[j], float(times[i]), i)
         else:
             pictures, lines, alert = _network_step(run, forks, row, kept[i], kept[j], float(times[i]))
         video.write(hud(side_by_side(pictures, scale), lines, alert))
@@ -225,6 +239,7 @@ def _summary(run: _ClipRun, rows: list[dict], wall_s: float) -> dict:
         ctrl = {
             "name": "geofence",
             "ego_speed_mps": a.ego_speed,
+            "ego_motion": "oxts" if a.oxts is not None else "constant",
             "camera_height_m": a.camera_height,
             "pitch_deg": a.pitch,
             "persistence_jobs": run.ctrl.cfg.persistence_frames,
