@@ -121,7 +121,8 @@ class KittiExporter:
         cv2.imwrite(str(self.tmp / kr.IMAGES / "data" / f"{name}.png"), cv2.cvtColor(r.rgb, cv2.COLOR_RGB2BGR))
         scan = scan_from_depth(r.depth_m, r.instance, self.pin, self.v2c, self.rows, self.cols)  # a rigid mount
         scan.tofile(self.tmp / kr.VELODYNE / "data" / f"{name}.bin")
-        (self.tmp / kr.OXTS / "data" / f"{name}.txt").write_text(kr.oxts_line(rec.ego_speed_mps, rec.ego_yaw_rate_radps))
+        oxts = kr.oxts_line(rec.ego_speed_mps, rec.ego_yaw_rate_radps)
+        (self.tmp / kr.OXTS / "data" / f"{name}.txt").write_text(oxts)
         self.times.append(rec.t_s)
         crit = rec.truth.critical
         depth = ttc = ""

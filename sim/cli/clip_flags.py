@@ -104,7 +104,8 @@ def check(args, size, zoom):
         if size is None:
             raise CliError("--controller geofence needs --size HxW: the network's size")
     elif args.ego_speed is not None or args.oxts is not None:
-        raise CliError(f"{'--ego-speed' if args.ego_speed is not None else '--oxts'} applies with --controller geofence")
+        flag = "--ego-speed" if args.ego_speed is not None else "--oxts"
+        raise CliError(f"{flag} applies with --controller geofence")
     if not (np.isfinite(args.camera_height) and args.camera_height > 0):
         raise CliError(f"--camera-height {args.camera_height:g}: must be > 0 [m]")
     if not -30 <= args.pitch <= 30:
