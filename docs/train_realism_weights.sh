@@ -2,8 +2,8 @@
 # A fine-tune of the shipped weights on images through the camera sensor model (docs/sensor.md),
 # averaged with its start.
 #
-#   1. data: bittc generate --out data/bittc_v7 --fovea-share 0.5 --vehicle-texture mixed --realism-share 0.5 --split val   --samples 400  --seed 7 --workers 2
-#            bittc generate --out data/bittc_v7 --fovea-share 0.5 --vehicle-texture mixed --realism-share 0.5 --split train --samples 8000 --seed 7 --workers 2
+#   1. data: bittc generate --out data/bittc_v7 --fovea-share 0.5 --vehicle-texture mixed --realism-share 0.5 --realism-codecs jpeg --split val   --samples 400  --seed 7 --workers 2
+#            bittc generate --out data/bittc_v7 --fovea-share 0.5 --vehicle-texture mixed --realism-share 0.5 --realism-codecs jpeg --split train --samples 8000 --seed 7 --workers 2
 #   2. this script: [START=FILE] [SHIP=1] bash docs/train_realism_weights.sh [DATA_V7] [OUT] [RELEASE]
 #
 # START is the shipped bittc-2026.12-fovea2-blend (bittc_core/weights/bittc_default.pt) by

@@ -2,7 +2,7 @@
 # A fine-tune of the shipped weights on scenes with pedestrians and cyclists, averaged with its start.
 #
 #   1. data: for s in "val 400" "test 400" "train 8000"; do set -- $s; bittc generate --out data/bittc_v9 \
-#              --fovea-share 0.4 --vehicle-texture mixed --realism-share 0.5 --vru-share 0.6 --split $1 \
+#              --fovea-share 0.4 --vehicle-texture mixed --realism-share 0.5 --realism-codecs jpeg --vru-share 0.6 --split $1 \
 #              --samples $2 --seed 9 --workers 2; done
 #   2. this script: [START=FILE] [SHIP=1] bash docs/train_vru_weights.sh [DATA_V9] [OUT] [RELEASE]
 #

@@ -52,12 +52,14 @@ def create_static_bodies(c, shapes: list[StaticShape], rgb=(1.0, 1.0, 1.0)) -> l
     return uids
 
 
-def create_vehicle_bodies(c, spec: VehicleSpec, tex: dict[str, int]) -> tuple[int, int, float]:
+def create_vehicle_bodies(c, spec: VehicleSpec, tex: dict[str, int], dressed: bool = False) -> tuple[int, int, float]:
     """The two bodies of a vehicle on client ``c``: the boxes (lower body at its own centre,
-    the rest as fixed links, textured from ``tex`` by part) and the four wheels as one mesh
-    in the footprint frame. Returns (body uid, wheel uid, the body's base height [m])."""
-    boxes = [part for part in parts(spec) if part.shape == "box"]
-    wheels = [part for part in parts(spec) if part.shape == "wheel"]
+    the rest as fixed links, textured from ``tex`` by part; ``dressed``: with plates and
+    lamps) and the four wheels as one mesh in the footprint frame. Returns (body uid, wheel
+    uid, the body's base height [m])."""
+    all_parts = parts(spec, dressed)
+    boxes = [part for part in all_parts if part.shape == "box"]
+    wheels = [part for part in all_parts if part.shape == "wheel"]
     shapes = [c.createVisualShape(p.GEOM_BOX, halfExtents=list(part.half_extents_m)) for part in boxes]
     n = len(shapes) - 1
     base_pos = np.asarray(boxes[0].center_m)

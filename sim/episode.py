@@ -65,9 +65,10 @@ class ScenarioSim:
         self.case = case
         self.sensor = sensor
         if sensor is not None:
-            from sim.sensor import REALISM_STREAM
+            from sim.sensor import REALISM_STREAM, new_codec
 
             self._sensor_rng = np.random.default_rng([seed, REALISM_STREAM])
+            self._codecs = {view: new_codec(sensor) for view in ("wide", "fovea")}  # one stream per view
         self._last_capture: Frame | None = None
         self.camera = camera
         self.textures = textures

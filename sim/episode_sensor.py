@@ -21,7 +21,8 @@ def through_sensor(sim, frame: Frame, prev: Frame | None) -> Frame:
     out = {}
     for view in ("wide", "fovea") if frame.fovea is not None else ("wide",):
         flow = sim.ground_truth(prev, frame, view).flow_px
-        out[view] = apply_effects(frame.view(view)[0], sim.sensor, flow, frame.t_s - prev.t_s, sim._sensor_rng)
+        dt = frame.t_s - prev.t_s
+        out[view] = apply_effects(frame.view(view)[0], sim.sensor, flow, dt, sim._sensor_rng, sim._codecs[view])
     fovea = replace(frame.fovea, rgb=out["fovea"]) if frame.fovea is not None else None
     return replace(frame, image=out["wide"], fovea=fovea)
 

@@ -17,7 +17,10 @@ into what a real camera would record, each effect drawn once per clip (``draw_ef
    white level (``full_well`` photo-electrons at white), plus Gaussian read noise of
    ``read_noise_dn`` [DN of 255].
 7. **Tone curve**: encoded with gamma 2.2 x ``gamma``, clipped, quantized to 8 bits.
-8. **Compression**: JPEG at ``jpeg_quality`` (None: none).
+8. **Compression**: JPEG at ``jpeg_quality``, or an H.264-like video stream at quantizer
+   ``video_qp`` (``sim.video_codec``: intra frames every second, motion-compensated inter
+   frames between; the stream's state lives in a ``VideoCodec`` per view, passed as
+   ``codec``), or none.
 
 The motion is the ground truth's flow of the pair (``flow_px``, where a point is in this
 frame minus where it was one frame interval ``dt_s`` before). Every per-pixel truth still
@@ -46,9 +49,12 @@ RANGES = {
     "read_noise_dn": (0.5, 3.0),
     "gamma": (0.8, 1.25),
     "jpeg_quality": (40, 95),
+    "video_qp": (24, 36),
 }
 LOG_UNIFORM = ("gain", "full_well", "gamma")
-JPEG_SHARE = 0.5  # share of clips compressed
+COMPRESSED_SHARE = 0.5  # share of clips compressed, split evenly between the codecs drawn from
+CODECS = ("jpeg", "video")
+CODEC_SETS = {"jpeg": ("jpeg",), "video": ("video",), "jpeg+video": ("jpeg", "video")}
 
 
 @dataclass(frozen=True)
@@ -61,7 +67,8 @@ class SensorEffects:
     full_well: float = float("inf")  # [e-] photo-electrons at white (shot noise); inf: none
     read_noise_dn: float = 0.0  # [DN] Gaussian read noise, 8-bit scale
     gamma: float = 1.0  # [-] tone curve relative to the display gamma
-    jpeg_quality: int | None = None  # JPEG quality 1-100, None: no compression
+    jpeg_quality: int | None = None  # JPEG quality 1-100, None: no JPEG
+    video_qp: int | None = None  # H.264-like stream quantizer 0-51 (sim.video_codec), None: no video coding
 
     def __post_init__(self) -> None:
         checks = {
@@ -74,6 +81,7 @@ class SensorEffects:
             "read_noise_dn": 0 <= self.read_noise_dn <= 50,
             "gamma": 0.25 <= self.gamma <= 4,
             "jpeg_quality": self.jpeg_quality is None or 1 <= self.jpeg_quality <= 100,
+            "video_qp": self.video_qp is None or (self.jpeg_quality is None and 0 <= self.video_qp <= 51),
         }
         for name, ok in checks.items():
             if not ok:
@@ -83,17 +91,37 @@ class SensorEffects:
         return {k: (None if v == float("inf") else v) for k, v in asdict(self).items()}
 
 
-def draw_effects(rng: np.random.Generator) -> SensorEffects:
-    """One clip's effects, each drawn from ``RANGES`` (JPEG on ``JPEG_SHARE`` of clips)."""
+def draw_effects(rng: np.random.Generator, codecs: tuple[str, ...] = CODECS) -> SensorEffects:
+    """One clip's effects, each drawn from ``RANGES``; ``COMPRESSED_SHARE`` of clips compressed,
+    by one of ``codecs`` each (with ``("jpeg",)`` the draws of the datasets made before the
+    video codec, bytes and all)."""
+    unknown = [c for c in codecs if c not in CODECS]
+    if unknown or not codecs:
+        raise ValueError(f"codecs {codecs!r}: expected some of {CODECS}")
     kw = {}
     for name, (lo, hi) in RANGES.items():
+        if name == "video_qp":
+            continue
         if name == "jpeg_quality":
-            kw[name] = int(rng.integers(lo, hi + 1)) if rng.random() < JPEG_SHARE else None
+            u = rng.random()
+            if u < COMPRESSED_SHARE:
+                codec = codecs[min(int(u / COMPRESSED_SHARE * len(codecs)), len(codecs) - 1)]
+                key = "jpeg_quality" if codec == "jpeg" else "video_qp"
+                kw[key] = int(rng.integers(RANGES[key][0], RANGES[key][1] + 1))
         elif name in LOG_UNIFORM:
             kw[name] = float(np.exp(rng.uniform(np.log(lo), np.log(hi))))
         else:
             kw[name] = float(rng.uniform(lo, hi))
     return SensorEffects(**kw)
+
+
+def new_codec(effects: SensorEffects):
+    """The ``VideoCodec`` of one stream (one view) through ``effects``, or None without video coding."""
+    if effects.video_qp is None:
+        return None
+    from sim.video_codec import CodecConfig, VideoCodec
+
+    return VideoCodec(CodecConfig(effects.video_qp))
 
 
 def _sample(image: np.ndarray, flow: np.ndarray, share: np.ndarray | float) -> np.ndarray:
@@ -106,10 +134,19 @@ def _sample(image: np.ndarray, flow: np.ndarray, share: np.ndarray | float) -> n
 
 
 def apply_effects(
-    image_rgb: np.ndarray, effects: SensorEffects, flow_px: np.ndarray | None, dt_s: float, rng: np.random.Generator
+    image_rgb: np.ndarray,
+    effects: SensorEffects,
+    flow_px: np.ndarray | None,
+    dt_s: float,
+    rng: np.random.Generator,
+    codec=None,
 ) -> np.ndarray:
     """uint8 (H, W, 3) RGB -> the same frame through the sensor (see the module docstring).
-    ``flow_px``: (H, W, 2) the frame's motion over ``dt_s`` [s], or None (no motion effects)."""
+    ``flow_px``: (H, W, 2) the frame's motion over ``dt_s`` [s], or None (no motion effects).
+    ``codec``: the stream's ``new_codec(effects)``, fed every frame of the stream in order
+    (required when ``effects.video_qp`` is set)."""
+    if effects.video_qp is not None and codec is None:
+        raise ValueError("apply_effects: effects with video_qp need the stream's codec (sim.sensor.new_codec)")
     e = effects
     lin = (image_rgb.astype(np.float32) / 255.0) ** DISPLAY_GAMMA
     h, w = lin.shape[:2]
@@ -137,13 +174,15 @@ def apply_effects(
     if e.jpeg_quality is not None:
         ok, buf = cv2.imencode(".jpg", cv2.cvtColor(out, cv2.COLOR_RGB2BGR), [cv2.IMWRITE_JPEG_QUALITY, e.jpeg_quality])
         out = cv2.cvtColor(cv2.imdecode(buf, cv2.IMREAD_COLOR), cv2.COLOR_BGR2RGB)
+    if effects.video_qp is not None:
+        out = codec(out)
     return out
 
 
 REALISM_STREAM = 0x5E_A5  # the second seed word of a clip's sensor draws: its scene's draws stay as they were
 
 
-def sensor_clip(clip, sample_seed: int, share: float):
+def sensor_clip(clip, sample_seed: int, share: float, codecs: tuple[str, ...] = CODECS):
     """A rendered ``sim.random_scene.Clip`` through a sensor drawn for it, with probability
     ``share`` (the draws come from their own stream, so the scene is the same either way);
     its meta gains ``sensor`` (the effects, or None; at share 0 the clip is returned as it
@@ -156,8 +195,9 @@ def sensor_clip(clip, sample_seed: int, share: float):
     rng = np.random.default_rng([sample_seed, REALISM_STREAM])
     if rng.random() >= share:
         return replace(clip, meta={**clip.meta, "sensor": None})
-    effects = draw_effects(rng)
+    effects = draw_effects(rng, codecs)
     dt = float(clip.meta["dt_s"])
     flows = [clip.gts[0].flow_px] + [g.flow_px for g in clip.gts]
-    images = [apply_effects(img, effects, f, dt, rng) for img, f in zip(clip.images, flows)]
+    codec = new_codec(effects)  # the clip's frames are one stream
+    images = [apply_effects(img, effects, f, dt, rng, codec) for img, f in zip(clip.images, flows)]
     return replace(clip, images=images, meta={**clip.meta, "sensor": effects.as_dict()})

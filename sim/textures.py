@@ -20,6 +20,10 @@ Vehicle styles (``TextureBank(vehicles=...)``):
     change can be measured inside its outline, not only at its edges (an experiment:
     it did not raise the network's accuracy on actors, see the README).
     ``"mixed"``: odd texture variants detailed, even ones plain, so one world has both.
+    ``"dressed"``: detailed paint; glass in window frames (the body's colour round each
+    pane, a pillar, a reflection across the glass); and fittings: a number plate (white or
+    yellow, a dark border and characters) and two lamps (red at the rear, white at the
+    front) on each end, thin boxes just proud of the end faces (``sim.vehicles.parts``).
 """
 
 from __future__ import annotations
@@ -36,7 +40,8 @@ TEXTURE_SIZE_PX = 128
 
 GROUND_TEXTURE_SIZE_PX = 256  # a 20 m road tile: 8 cm per texel along the road
 GROUND_STYLES = ("detailed", "smooth")
-VEHICLE_STYLES = ("plain", "detailed", "mixed")
+VEHICLE_STYLES = ("plain", "detailed", "mixed", "dressed")
+FITTING_KINDS = ("plate", "tail_lamp", "head_lamp")  # the fittings of a dressed vehicle, the same in every style
 VEHICLE_KINDS = ("paint", "glass")  # the kinds a vehicle style changes
 
 
@@ -140,6 +145,63 @@ def vehicle_detail(
     return np.clip(img.astype(np.float32) * shade[..., None], 0, 255).astype(np.uint8)
 
 
+def window_frames(rng: np.random.Generator, glass: np.ndarray, palette_index: int) -> np.ndarray:
+    """Glass (uint8) set in frames of the body's colour: a border 6-10 % of the face, a
+    pillar at 45-60 % across, and a lighter band across the panes (a reflection of the sky).
+    Every face of the cabin box shows it (windscreen, side windows, rear window)."""
+    from sim.vehicles import PALETTE
+
+    s = glass.shape[0]
+    img = glass.astype(np.float32)
+    v, u = np.mgrid[0:s, 0:s].astype(np.float32) / s
+    slope, offset = rng.uniform(0.4, 1.2), rng.uniform(-0.2, 0.6)
+    band = np.exp(-(((v - slope * u - offset) / 0.12) ** 2))  # a soft diagonal reflection
+    img *= 1.0 + 0.6 * band[..., None]
+    frame = np.asarray(PALETTE[palette_index], np.float32) * 255.0 * rng.uniform(0.75, 0.95)
+    border = int(s * rng.uniform(0.06, 0.10))
+    pillar = int(s * rng.uniform(0.45, 0.60))
+    mask = np.zeros((s, s), bool)
+    mask[:border] = mask[-border:] = True
+    mask[:, :border] = mask[:, -border:] = True
+    mask[:, pillar - border // 2 : pillar + border // 2 + 1] = True
+    img[mask] = frame
+    return np.clip(img, 0, 255).astype(np.uint8)
+
+
+def number_plate(rng: np.random.Generator) -> np.ndarray:
+    """A plate: white or yellow, a dark border, six to eight dark characters as bars and rings."""
+    s = TEXTURE_SIZE_PX
+    base = (0.93, 0.93, 0.9) if rng.random() < 0.7 else (0.95, 0.8, 0.1)
+    img = tinted(rng, base, 0.1).astype(np.float32)
+    ink = np.array([20.0, 20.0, 25.0])
+    edge = s // 20
+    img[:edge] = img[-edge:] = ink
+    img[:, : edge // 2] = img[:, -edge // 2 :] = ink
+    n = int(rng.integers(6, 9))
+    x0, x1 = 0.12 * s, 0.95 * s
+    w = (x1 - x0) / n
+    for i in range(n):  # each character: a stem and, at random, a bar across or a bowl
+        a = int(x0 + i * w + 0.2 * w)
+        b = int(x0 + (i + 1) * w - 0.2 * w)
+        img[int(0.2 * s) : int(0.8 * s), a : a + max(1, (b - a) // 3)] = ink
+        if rng.random() < 0.5:
+            img[int(0.45 * s) : int(0.55 * s), a:b] = ink
+        else:
+            img[int(0.2 * s) : int(0.3 * s), a:b] = ink
+            img[int(0.7 * s) : int(0.8 * s), a:b] = ink
+    return cv2.GaussianBlur(np.clip(img, 0, 255).astype(np.uint8), (0, 0), 0.7)
+
+
+def lamp(rng: np.random.Generator, rgb: tuple[float, float, float]) -> np.ndarray:
+    """A lamp lens: its colour, brighter towards the middle, with a darker rim."""
+    s = TEXTURE_SIZE_PX
+    v, u = np.mgrid[0:s, 0:s].astype(np.float32) / (s - 1) * 2 - 1
+    r2 = np.clip(u**2 + v**2, 0, 2) / 2
+    shade = 1.0 - 0.45 * r2 + 0.05 * (smooth_noise(rng, s, octaves=2, first_cells=4, decay=0.5) - 0.5)
+    img = np.asarray(rgb, np.float32)[None, None] * shade[..., None] * 255.0
+    return np.clip(img, 0, 255).astype(np.uint8)
+
+
 def facade(rng: np.random.Generator) -> np.ndarray:
     """Building facade: wall colour with a grid of darker windows."""
     wall = tuple(rng.uniform(0.35, 0.85, 3))
@@ -170,7 +232,10 @@ def sky_gradient(height_px: int, width_px: int, horizon_row: float) -> np.ndarra
 
 
 # --------------------------------------------------------------------------- bank
-TEXTURE_KINDS = ("asphalt", "grass", "concrete", "metal", "bark", "foliage", "facade", "sign", "glass", "tyre", "paint")
+TEXTURE_KINDS = (
+    *("asphalt", "grass", "concrete", "metal", "bark", "foliage", "facade", "sign", "glass", "tyre", "paint"),
+    *FITTING_KINDS,  # appended: the seeds of the kinds before stay as they were
+)
 VARIANTS = 6  # variants per kind (per palette colour for paint)
 
 
@@ -194,15 +259,17 @@ class TextureBank:
         if kind not in TEXTURE_KINDS:
             raise ValueError(f"unknown texture kind {kind!r}")
         variant %= VARIANTS
-        style = self.vehicles if kind in VEHICLE_KINDS else self.ground
+        style = self.vehicles if kind in VEHICLE_KINDS else "fitting" if kind in FITTING_KINDS else self.ground
         if style == "mixed":
             style = "detailed" if variant % 2 else "plain"
         p = self.dir / f"{style}_{kind}_{palette_index}_{variant}.png"
         if not p.exists():
             rng = np.random.default_rng([self.seed, TEXTURE_KINDS.index(kind), palette_index, variant])
             img = _draw(kind, rng, palette_index, self.ground)
-            if style == "detailed" and kind in VEHICLE_KINDS:  # drawn after the plain one: same base
+            if style in ("detailed", "dressed") and kind in ("paint", "glass"):  # after the plain one: same base
                 img = vehicle_detail(rng, img, *((0.5, 0.35) if kind == "paint" else (0.8, 0.5)))
+            if style == "dressed" and kind == "glass":
+                img = window_frames(rng, img, palette_index)
             tmp = p.with_name(f".{p.name}.{os.getpid()}.tmp.png")
             cv2.imwrite(str(tmp), cv2.cvtColor(img, cv2.COLOR_RGB2BGR))
             os.replace(tmp, p)
@@ -238,4 +305,10 @@ def _draw(kind: str, rng: np.random.Generator, palette_index: int, ground: str) 
         return tinted(rng, tuple(base), 0.5)
     if kind == "tyre":
         return tinted(rng, (0.08, 0.08, 0.08), 0.5)
+    if kind == "plate":
+        return number_plate(rng)
+    if kind == "tail_lamp":
+        return lamp(rng, (0.85, 0.08, 0.06))
+    if kind == "head_lamp":
+        return lamp(rng, (0.97, 0.96, 0.88))
     return vehicle_paint(rng, PALETTE[palette_index])

@@ -67,11 +67,20 @@ class Part:
     shape: str  # "box" | "wheel"
     center_m: tuple[float, float, float]
     half_extents_m: tuple[float, float, float]  # for a wheel: (radius, half width, radius)
-    texture: str  # "paint" | "glass" | "tyre"
+    texture: str  # "paint" | "glass" | "tyre", and on a dressed vehicle "plate" | "tail_lamp" | "head_lamp"
 
 
-def parts(spec: VehicleSpec) -> list[Part]:
-    """Lower body on the full footprint, cabin (or cargo box) on top, four wheels."""
+#: the fittings of a dressed vehicle (``parts(..., dressed=True)``): thin boxes standing
+#: FITTING_PROUD_M proud of the body's end faces (1-5 mm beyond the footprint)
+PLATE_SIZE_M = (0.52, 0.11)  # (width, height) of a number plate, EU size
+LAMP_SIZE_M = (0.24, 0.12)  # (width, height) of a head or tail lamp
+FITTING_PROUD_M = (0.001, 0.005)  # [m] from, to beyond the end face
+
+
+def parts(spec: VehicleSpec, dressed: bool = False) -> list[Part]:
+    """Lower body on the full footprint, cabin (or cargo box) on top, four wheels; with
+    ``dressed`` also a number plate and two lamps on each end (tail lamps at the rear, head
+    lamps at the front), each a thin box just proud of the end face."""
     L, W, H = spec.length_m, spec.width_m, spec.height_m
     truck = spec.kind == "truck"
     van = spec.kind == "van"
@@ -116,6 +125,25 @@ def parts(spec: VehicleSpec) -> list[Part]:
             out.append(
                 Part("wheel", (x, y, WHEEL_RADIUS_M), (WHEEL_RADIUS_M, WHEEL_WIDTH_M / 2, WHEEL_RADIUS_M), "tyre")
             )
+    if dressed:
+        out += _fittings(L, W, GROUND_CLEARANCE_M, body_top)
+    return out
+
+
+def _fittings(L: float, W: float, bottom: float, top: float) -> list[Part]:
+    """Plates low in the middle of each end face, lamps high at its corners."""
+    a, b = FITTING_PROUD_M
+    half_t = (b - a) / 2
+    x_face = L / 2 + a + half_t
+    plate_z = bottom + 0.3 * (top - bottom)
+    lamp_z = bottom + 0.72 * (top - bottom)
+    lamp_y = W / 2 - 0.05 - LAMP_SIZE_M[0] / 2
+    out = []
+    for sign, lamp in ((-1, "tail_lamp"), (1, "head_lamp")):
+        x = sign * x_face
+        out.append(Part("box", (x, 0.0, plate_z), (half_t, PLATE_SIZE_M[0] / 2, PLATE_SIZE_M[1] / 2), "plate"))
+        for side in (1, -1):
+            out.append(Part("box", (x, side * lamp_y, lamp_z), (half_t, LAMP_SIZE_M[0] / 2, LAMP_SIZE_M[1] / 2), lamp))
     return out
 
 

@@ -194,11 +194,10 @@ class World:
         """
         c = self.client
         variant = int(self.rng.integers(textures.VARIANTS))
-        tex = {
-            "paint": self.texture("paint", variant, spec.palette_index),
-            "glass": self.texture("glass", variant, spec.palette_index),
-        }
-        uid, wheel_uid, base_z = create_vehicle_bodies(c, spec, tex)
+        dressed = self.bank.vehicles == "dressed"
+        kinds = ("paint", "glass", *(textures.FITTING_KINDS if dressed else ()))
+        tex = {k: self.texture(k, variant, spec.palette_index) for k in kinds}
+        uid, wheel_uid, base_z = create_vehicle_bodies(c, spec, tex, dressed)
         instance = self._next_instance()
         self._vehicle_uid[instance] = uid
         self._wheel_uid[instance] = wheel_uid

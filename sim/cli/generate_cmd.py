@@ -17,6 +17,7 @@ _FLAGS = {
     "ahead_share": "--ahead-share",
     "fovea_share": "--fovea-share",
     "realism_share": "--realism-share",
+    "realism_codecs": "--realism-codecs",
     "vru_share": "--vru-share",
     "supersample": "--supersample",
     "ground_texture": "--ground-texture",
@@ -55,8 +56,9 @@ def add_parser(sub) -> argparse.ArgumentParser:
         "--vehicle-texture",
         default="plain",
         help="vehicle paint and glass: plain (default, as in bittc_v1 and bittc_v2), detailed (shading "
-        "and spots inside the outline whose motion can be measured, as in bittc_v3) or mixed (half the "
-        "texture variants of each colour plain, half detailed, as in bittc_v5)",
+        "and spots inside the outline whose motion can be measured, as in bittc_v3), mixed (half the "
+        "texture variants of each colour plain, half detailed, as in bittc_v5) or dressed (detailed, windows in "
+        "frames, number plates and lamps)",
     )
     p.add_argument(
         "--ahead-share",
@@ -84,7 +86,15 @@ def add_parser(sub) -> argparse.ArgumentParser:
         metavar="SHARE",
         help="this share of the samples goes through a camera sensor drawn per clip (sim.sensor): rolling shutter "
         "and motion blur from the exact motion, defocus, vignetting, exposure, shot and read noise, tone curve, "
-        "JPEG (default 0: clean renders, as in every dataset the shipped weights were trained on)",
+        "JPEG or an H.264-like video stream (default 0: clean renders, as in every dataset the shipped weights were "
+        "trained on)",
+    )
+    p.add_argument(
+        "--realism-codecs",
+        default="jpeg+video",
+        choices=("jpeg", "video", "jpeg+video"),
+        help="the compressions the sensor draws from, half the clips compressed (default jpeg+video; jpeg: the "
+        "draws of the datasets made before the video codec)",
     )
     p.add_argument(
         "--vru-share",
@@ -129,6 +139,7 @@ def _generate(args, h: int, w: int) -> dict:
         ahead_share=args.ahead_share,
         fovea_share=args.fovea_share,
         realism_share=args.realism_share,
+        realism_codecs=args.realism_codecs,
         vru_share=args.vru_share,
     )
     return generate(

@@ -52,7 +52,8 @@ def add_realism_flag(p: argparse.ArgumentParser) -> None:
         "--realism",
         action="store_true",
         help="the camera's images go through a sensor drawn from --seed (sim.sensor: rolling shutter and motion "
-        "blur from the exact motion, defocus, vignetting, exposure, noise, tone curve, JPEG); printed",
+        "blur from the exact motion, defocus, vignetting, exposure, noise, tone curve, JPEG or H.264-like video); "
+        "printed",
     )
 
 
@@ -96,7 +97,8 @@ def add_camera_flags(p: argparse.ArgumentParser) -> None:
         "--vehicle-texture",
         default="plain",
         help="vehicle paint and glass: plain (default, as in datasets bittc_v1 and bittc_v2), detailed "
-        "(as in bittc_v3) or mixed (half the texture variants of each colour detailed, as in bittc_v5 and bittc_v6)",
+        "(as in bittc_v3), mixed (half the texture variants of each colour detailed, as in bittc_v5 and bittc_v6) or "
+        "dressed (detailed, windows in frames, number plates and lamps)",
     )
 
 

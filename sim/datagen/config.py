@@ -45,6 +45,7 @@ class GenerationConfig:
     ahead_share: float = 0.0  # share of samples with a braking case ahead (sim.random_scene.AHEAD_*)
     fovea_share: float = 0.0  # share of samples seen through a fovea (sim.fovea_scene)
     realism_share: float = 0.0  # share of samples through a sensor drawn per clip (sim.sensor)
+    realism_codecs: str = "jpeg+video"  # the compressions a sensor draws from (sim.sensor.CODEC_SETS)
     vru_share: float = 0.0  # share of samples with pedestrians and cyclists (sim.random_vrus)
 
     def __post_init__(self) -> None:
@@ -60,6 +61,10 @@ class GenerationConfig:
             raise ConfigError(f"fovea_share {self.fovea_share}: must be in [0, 1]")
         if not 0.0 <= self.realism_share <= 1.0:
             raise ConfigError(f"realism_share {self.realism_share}: must be in [0, 1]")
+        from sim.sensor import CODEC_SETS
+
+        if self.realism_codecs not in CODEC_SETS:
+            raise ConfigError(f"realism_codecs {self.realism_codecs!r}: must be one of {', '.join(CODEC_SETS)}")
         if not 0.0 <= self.vru_share <= 1.0:
             raise ConfigError(f"vru_share {self.vru_share}: must be in [0, 1]")
         if self.supersample not in (1, 2, 3, 4):

@@ -58,10 +58,12 @@ def prepare_dir(out: Path, cfg: GenerationConfig) -> None:
         old.setdefault("ahead_share", 0.0)  # and no braking cases ahead
         old.setdefault("fovea_share", 0.0)  # and no fovea scenes
         old.setdefault("realism_share", 0.0)  # and no sensor effects
+        old.setdefault("realism_codecs", "jpeg")  # and JPEG the sensor's only compression
         old.setdefault("vru_share", 0.0)  # and no pedestrians or cyclists
         mine = asdict(cfg)
-        for k in sorted(set(old) | set(mine)):
-            if old.get(k) != mine.get(k):
+        a, b = _as_written(old), _as_written(mine)
+        for k in sorted(set(a) | set(b)):
+            if a.get(k) != b.get(k):
                 raise ConfigError(
                     f"output folder {str(out)!r}: was generated with {k} = {old.get(k)!r}, "
                     f"this run asks for {mine.get(k)!r}"
@@ -71,14 +73,22 @@ def prepare_dir(out: Path, cfg: GenerationConfig) -> None:
     try:
         out.mkdir(parents=True, exist_ok=True)
         tmp = gen.with_name(".generation.yaml.tmp")
-        settings = asdict(cfg)
-        for key in ("realism_share", "vru_share"):  # the generation.yaml bytes of the datasets made before them
-            if settings[key] == 0.0:
-                del settings[key]
-        tmp.write_text(yaml.safe_dump(settings, sort_keys=True))
+        tmp.write_text(yaml.safe_dump(_as_written(asdict(cfg)), sort_keys=True))
         os.replace(tmp, gen)
     except OSError as e:
         raise ConfigError(f"output folder {str(out)!r}: not writable ({e.strerror})") from None
+
+
+def _as_written(settings: dict) -> dict:
+    """The settings as generation.yaml holds them: a key added since is left out at its old
+    meaning, so that the bytes of the datasets made before it stay as they were."""
+    out = dict(settings)
+    for key in ("realism_share", "vru_share"):
+        if out.get(key) == 0.0:
+            del out[key]
+    if "realism_share" not in out or out.get("realism_codecs") == "jpeg":
+        out.pop("realism_codecs", None)  # no sensor, or JPEG its only compression, as before the video codec
+    return out
 
 
 def pending_indices(split_dir: Path, n: int, clip_length: int) -> tuple[list[int], int]:

@@ -60,7 +60,7 @@ def make_sample(cfg_dict: dict, split_dir: str, split: str, index: int) -> tuple
     """Render and write one sample; returns (index, seconds, error text or None)."""
     from sim.random_scene import render_clip
     from sim.scenery import RoadConfig
-    from sim.sensor import sensor_clip
+    from sim.sensor import CODEC_SETS, sensor_clip
     from sim.world import World
 
     if _WORKER.get("cfg") != GenerationConfig(**cfg_dict):
@@ -83,7 +83,7 @@ def make_sample(cfg_dict: dict, split_dir: str, split: str, index: int) -> tuple
             fovea_share=cfg.fovea_share,
             vru_share=cfg.vru_share,
         )
-        clip = sensor_clip(clip, scene_seed(cfg, split, index), cfg.realism_share)
+        clip = sensor_clip(clip, scene_seed(cfg, split, index), cfg.realism_share, CODEC_SETS[cfg.realism_codecs])
         write_sample(
             Path(split_dir),
             index,
