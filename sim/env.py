@@ -42,7 +42,8 @@ Reward: -1 on the step of a collision, minus 0.01 per (m/s^2 * s) of commanded b
 
 Episode End:
     terminated — 1 s after a collision, ego standstill with nothing closing in, or the
-    threat resolved after braking (see :meth:`sim.episode.ScenarioSim.done`).
+    threat resolved after braking, or every actor passed: wholly behind the ego and not
+    gaining on it (see :meth:`sim.episode.ScenarioSim.done`).
     truncated — the scenario's ``duration_s`` is reached.
 
 Ground truth (per-pixel eta/tau/flow/depth maps, per-actor gaps and TTCs, collision;
@@ -230,7 +231,8 @@ class ScenarioEnv(gym.Env):
         obs = {k: v.copy() for k, v in obs.items()}
         info = {**info, "end_reason": reason}
         self._handed_out_s = time.perf_counter()
-        return obs, float(reward), reason in ("collision", "standstill", "resolved"), reason == "duration", info
+        terminated = reason in ("collision", "standstill", "resolved", "passed")
+        return obs, float(reward), terminated, reason == "duration", info
 
     def render(self):
         if self.render_mode == "rgb_array" and self._last is not None:

@@ -262,7 +262,9 @@ class ScenarioSim:
                 v.speed = 0.0  # all come to rest at the contact (highway-env does too)
 
     def done(self, truth: StepTruth) -> str | None:
-        """Why the run ends now, or None."""
+        """Why the run ends now, or None: ``collision`` (1 s after it), ``standstill``,
+        ``resolved`` (the ego braked and nothing closes in), ``passed`` (every actor wholly
+        behind the ego and not gaining: the outcome is settled), ``duration``."""
         if self.collision is not None:
             return "collision" if self.t_s >= self.collision.t_s + POST_COLLISION_S - 1e-9 else None
         still_closing = truth.critical is not None and truth.critical.closing_speed_mps > 1e-6
@@ -278,6 +280,8 @@ class ScenarioSim:
             )
         ):
             return "resolved"
+        if episode_contact.all_passed(self.ego, self.actors):
+            return "passed"
         if self.t_s >= self.case.duration_s - 1e-9:
             return "duration"
         return None

@@ -1,5 +1,6 @@
 """Contact between the ego and the actors of a run: their footprints' corners, the
-smallest gap between footprints [m] and the first actor whose footprint touches the ego's.
+smallest gap between footprints [m], the first actor whose footprint touches the ego's,
+and whether every actor has been passed.
 
 An actor here is anything with ``vehicle`` (a highway-env vehicle with ``world_pose()``)
 and ``spec`` (its ``VehicleSpec``)."""
@@ -45,3 +46,19 @@ def touching_actor(ego, actors):
     """The first actor whose footprint overlaps the ego's, or None."""
     ego_fp = ego_corners(ego)
     return next((a for a in actors if footprints_overlap(ego_fp, vehicle_corners(a.vehicle, a.spec))), None)
+
+
+def all_passed(ego, actors) -> bool:
+    """True when there are actors and each lies wholly behind the ego's rear (in the ego's
+    frame, its heading now) and does not gain on it (its velocity along that heading at most
+    the ego's speed): none can come back into the ego's path or its camera's view."""
+    if not actors:
+        return False
+    x, y, h = ego.world_pose()
+    fwd = np.array([math.cos(h), math.sin(h)])
+    rear = -EGO_SIZE_M[0] / 2
+    for a in actors:
+        ahead = (vehicle_corners(a.vehicle, a.spec) - (x, y)) @ fwd
+        if ahead.max() >= rear or float(a.vehicle.world_velocity() @ fwd) > float(ego.speed) + 1e-6:
+            return False
+    return True
