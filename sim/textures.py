@@ -24,6 +24,7 @@ Vehicle styles (``TextureBank(vehicles=...)``):
     pane, a pillar, a reflection across the glass); and fittings: a number plate (white or
     yellow, a dark border and characters) and two lamps (red at the rear, white at the
     front) on each end, thin boxes just proud of the end faces (``sim.vehicles.parts``).
+    ``"assorted"``: a third of the texture variants each plain, detailed and dressed.
 """
 
 from __future__ import annotations
@@ -40,7 +41,7 @@ TEXTURE_SIZE_PX = 128
 
 GROUND_TEXTURE_SIZE_PX = 256  # a 20 m road tile: 8 cm per texel along the road
 GROUND_STYLES = ("detailed", "smooth")
-VEHICLE_STYLES = ("plain", "detailed", "mixed", "dressed")
+VEHICLE_STYLES = ("plain", "detailed", "mixed", "dressed", "assorted")
 FITTING_KINDS = ("plate", "tail_lamp", "head_lamp")  # the fittings of a dressed vehicle, the same in every style
 VEHICLE_KINDS = ("paint", "glass")  # the kinds a vehicle style changes
 
@@ -255,13 +256,22 @@ class TextureBank:
         self.dir = Path(directory)
         self.dir.mkdir(parents=True, exist_ok=True)
 
+    def vehicle_style(self, variant: int) -> str:
+        """The style of a vehicle drawn with texture ``variant``: "mixed" and "assorted"
+        resolved to plain, detailed (and dressed) by the variant."""
+        variant %= VARIANTS
+        if self.vehicles == "mixed":
+            return "detailed" if variant % 2 else "plain"
+        if self.vehicles == "assorted":
+            return ("plain", "detailed", "dressed")[variant % 3]
+        return self.vehicles
+
     def path(self, kind: str, variant: int, palette_index: int = 0) -> Path:
         if kind not in TEXTURE_KINDS:
             raise ValueError(f"unknown texture kind {kind!r}")
         variant %= VARIANTS
-        style = self.vehicles if kind in VEHICLE_KINDS else "fitting" if kind in FITTING_KINDS else self.ground
-        if style == "mixed":
-            style = "detailed" if variant % 2 else "plain"
+        style = self.vehicle_style(variant) if kind in VEHICLE_KINDS else self.ground
+        style = "fitting" if kind in FITTING_KINDS else style
         p = self.dir / f"{style}_{kind}_{palette_index}_{variant}.png"
         if not p.exists():
             rng = np.random.default_rng([self.seed, TEXTURE_KINDS.index(kind), palette_index, variant])

@@ -194,7 +194,7 @@ class World:
         """
         c = self.client
         variant = int(self.rng.integers(textures.VARIANTS))
-        dressed = self.bank.vehicles == "dressed"
+        dressed = self.bank.vehicle_style(variant) == "dressed"
         kinds = ("paint", "glass", *(textures.FITTING_KINDS if dressed else ()))
         tex = {k: self.texture(k, variant, spec.palette_index) for k in kinds}
         uid, wheel_uid, base_z = create_vehicle_bodies(c, spec, tex, dressed)

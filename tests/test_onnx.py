@@ -1,4 +1,7 @@
-"""ONNX export, the onnxruntime backend and its checks (skipped without the `onnx` extra)."""
+"""ONNX export, the onnxruntime backend and its checks (skipped without the `onnx` extra).
+
+All slow (`pytest -m slow`, which CI runs after the default tests): the exports themselves
+take most of a minute (torch.onnx with dynamo), on one core under `-n 2`."""
 
 from __future__ import annotations
 
@@ -24,6 +27,8 @@ from sim.cli import main  # noqa: E402
 
 SIZE = (24, 48)  # (H, W) of the tiny network's test frames
 HALF = (24, 24)  # (H, W) of a view half as wide (as the fovea beside the wide view)
+
+pytestmark = pytest.mark.slow
 
 
 def _tiny_checkpoint(path, seed: int = 0):
