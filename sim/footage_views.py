@@ -48,3 +48,14 @@ def side_by_side(images: list[np.ndarray], scale: int) -> np.ndarray:
     h = tiles[0].shape[0]
     tiles = [t if t.shape[0] == h else cv2.resize(t, (round(t.shape[1] * h / t.shape[0]), h)) for t in tiles]
     return np.concatenate(tiles, axis=1)
+
+
+def fence_columns(row: dict, view: str, thresholds, maps, roi, with_roi: bool) -> None:
+    """``row`` gains the share of ``view``'s pixels inside each fence of ``maps`` (K, H, W),
+    ``<view>_inside_<tau>s``, and with ``with_roi`` over ``roi`` (``<view>_roi_inside_<tau>s``,
+    empty where the region misses the view)."""
+    whole, inside_roi = inside_shares(maps, roi)
+    for t, a, b in zip(thresholds, whole, inside_roi):
+        row[f"{view}_inside_{t:g}s"] = round(a, 6)
+        if with_roi:
+            row[f"{view}_roi_inside_{t:g}s"] = "" if b is None else round(b, 6)

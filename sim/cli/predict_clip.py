@@ -40,39 +40,15 @@ import os
 import shutil
 import tempfile
 import time
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from bittc_core.errors import CliError
 from sim.cli.clip_flags import check, intrinsics, views_of
-from sim.footage_views import crop_view, inside_shares, roi_in_view, side_by_side
-
-
-def _controller(args, est, thr, views, cams, stride, rate_ratio):
-    from controllers.base import Calibration
-    from controllers.geofence import GeofenceConfig, GeofenceController
-    from sim.camera import CameraConfig
-    from sim.vehicles import EGO_SIZE_M
-
-    def cal(view, fovea=None):
-        c, (h, w) = cams[view], views[view][1]
-        return Calibration(
-            w, h, c.fx_px, c.fy_px, c.cx_px, c.cy_px, args.camera_height, CameraConfig().mount_forward_m,
-            args.pitch, est.dt_s, float(EGO_SIZE_M[0]), float(EGO_SIZE_M[1]), fovea,
-        )  # fmt: skip
-
-    base = GeofenceConfig(thresholds_s=tuple(thr), frame_stride=stride)
-    cfg = replace(
-        base,
-        persistence_frames=base.persistence_frames * rate_ratio,
-        release_frames=base.release_frames * rate_ratio,
-    )
-    ctrl = GeofenceController(est, cfg)
-    calibration = cal("wide", cal("fovea") if "fovea" in views else None)
-    ctrl.reset(calibration)
-    return ctrl, calibration
+from sim.cli.predict_controller import controller_step, open_loop_controller
+from sim.footage_views import crop_view, fence_columns, roi_in_view, side_by_side
 
 
 @dataclass
@@ -141,49 +117,8 @@ def _prepare(args, size, zoom) -> _ClipRun:
             raise CliError(f"--oxts {args.oxts!r}: {e}") from None
     if args.controller:
         ratio = max(int(round(est.dt_s / step)), 1)  # jobs per simulator job (10 Hz)
-        run.ctrl, run.calibration = _controller(args, est, thr, views, cams, stride, ratio)
+        run.ctrl, run.calibration = open_loop_controller(args, est, thr, views, cams, stride, ratio)
     return run
-
-
-def _fence_columns(row: dict, view: str, thresholds, maps, roi, with_roi: bool) -> None:
-    whole, inside_roi = inside_shares(maps, roi)
-    for t, a, b in zip(thresholds, whole, inside_roi):
-        row[f"{view}_inside_{t:g}s"] = round(a, 6)
-        if with_roi:
-            row[f"{view}_roi_inside_{t:g}s"] = "" if b is None else round(b, 6)
-
-
-def _controller_step(run: _ClipRun, row: dict, now: dict, before: dict, t_s: float, i: int):
-    """One job of the controller on the pair ending at frame ``i`` -> (pictures, HUD lines,
-    alert); fills ``row``."""
-    from controllers.base import Observation
-    from sim.video import geofence_overlay
-
-    a = run.args
-    speed, yaw = (float(run.motion[0][i]), float(run.motion[1][i])) if run.motion else (float(a.ego_speed), 0.0)
-    obs = Observation(
-        t_s, speed, now["wide"], before["wide"], run.pair_dt_s, run.calibration,
-        now.get("fovea"), before.get("fovea"), ego_yaw_rate_radps=yaw,
-    )  # fmt: skip
-    row |= {"ego_speed_mps": round(speed, 4), "ego_yaw_rate_radps": round(yaw, 5)}
-    cmd = run.ctrl.act(obs, None)
-    tel = cmd.telemetry
-    pictures = []
-    for v, gv in cmd.views().items():
-        _fence_columns(row, v, gv.thresholds_s, gv.maps, run.rois[v], a.roi is not None)
-        pictures.append(geofence_overlay(now[v], gv))
-    row |= {
-        "stage": tel["stage"],
-        "warning": int(cmd.warning),
-        "decel_mps2": round(float(cmd.decel_mps2), 3),
-        "fence_fired_s": tel["fence_fired_s"],
-        "fired_view": tel["fired_view"],
-    }
-    if cmd.warning and run.first["warning"] is None:
-        run.first["warning"] = row["t_s"]
-    if cmd.decel_mps2 > 0 and run.first["brake"] is None:
-        run.first["brake"] = row["t_s"]
-    return pictures, [f"t {t_s:.2f} s  {tel['stage']}  {cmd.decel_mps2:.1f} m/s2"], bool(cmd.warning)
 
 
 def _network_step(run: _ClipRun, forks: dict, row: dict, now: dict, before: dict, t_s: float):
@@ -193,7 +128,7 @@ def _network_step(run: _ClipRun, forks: dict, row: dict, now: dict, before: dict
     pictures = []
     for v in run.views:
         maps = forks[v].geofence(before[v], now[v], run.thr_est)
-        _fence_columns(row, v, run.thr, maps, run.rois[v], run.args.roi is not None)
+        fence_columns(row, v, run.thr, maps, run.rois[v], run.args.roi is not None)
         pictures.append(threshold_overlay(now[v], maps, run.thr))
     return pictures, [f"t {t_s:.2f} s  fences {' '.join(f'{t:g}' for t in np.sort(run.thr))} s"], False
 
@@ -223,7 +158,7 @@ def _frame_loop(run: _ClipRun, video) -> list[dict]:
         row = {"frame": i, "t_s": round(float(times[i]), 6), "prev_frame": j}
         row["pair_dt_s"] = round(float(times[i] - times[j]), 6)
         if run.ctrl is not None:
-            pictures, lines, alert = _controller_step(run, row, kept[i], kept[j], float(times[i]), i)
+            pictures, lines, alert = controller_step(run, row, kept[i], kept[j], float(times[i]), i)
         else:
             pictures, lines, alert = _network_step(run, forks, row, kept[i], kept[j], float(times[i]))
         video.write(hud(side_by_side(pictures, scale), lines, alert))
