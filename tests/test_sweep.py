@@ -273,7 +273,7 @@ def test_demo_suite_is_what_the_help_says():
     cases = [c.name for c in scenarios.resolve_suite("demo")]
     assert cases == list(scenarios.DEMO_CASES)
     assert all(name in scenarios.SUITES["demo"] for name in cases)
-    assert {c.family for c in scenarios.resolve_suite("demo")} >= {"CCRs", "CCRb"}
+    assert {c.family for c in scenarios.resolve_suite("demo")} >= {"CCRs", "CPLA", "CCFtap"}
     assert any(not c.threat for c in scenarios.resolve_suite("demo"))
 
 
