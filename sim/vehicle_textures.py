@@ -8,7 +8,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from sim.textures import TEXTURE_SIZE_PX, patches, smooth_noise, tinted
+from sim.texture_noise import TEXTURE_SIZE_PX, patches, smooth_noise, tinted
 
 
 def vehicle_paint(rng: np.random.Generator, rgb: tuple[float, float, float]) -> np.ndarray:
