@@ -39,6 +39,7 @@ def test_same_bytes_in_every_file_whatever_the_worker_count(tmp_path):
     assert not [name for name in fa if name.endswith(".lock")]
 
 
+@pytest.mark.slow  # a local Ray cluster starts a dozen processes: CI runs it with -m slow
 def test_ray_backend_gives_the_same_bytes(tmp_path):
     pytest.importorskip("ray")
     generate(tmp_path / "a", SMALL, "train", 4, workers=1, backend="local", progress=False)

@@ -258,6 +258,7 @@ def test_a_failing_run_is_recorded_and_the_sweep_goes_on(tiny, tmp_path, capsys)
     assert not [p for p in out.glob("runs/**/*") if p.name.endswith(".partial")]
 
 
+@pytest.mark.slow  # a local Ray cluster starts a dozen processes: CI runs it with -m slow
 def test_ray_backend_gives_the_local_results(tiny, tmp_path):
     pytest.importorskip("ray")
     s = _settings(tiny, controllers=("geofence", "oracle"), num_alphas=(1,))
