@@ -89,7 +89,12 @@ def _frames(folder: Path, sub: str, suffix: str) -> tuple[Path, ...]:
     d = folder / sub / "data"
     if not d.is_dir():
         raise FootageError(f"drive {str(folder)!r}: no {sub}/data folder")
-    return tuple(sorted(p for p in d.iterdir() if p.suffix == suffix))
+    return _files(d, suffix)
+
+
+def _files(data: Path, suffix: str) -> tuple[Path, ...]:
+    """The frame files of a ``data`` folder, one a frame, in frame order (by name)."""
+    return tuple(sorted(p for p in data.iterdir() if p.suffix == suffix))
 
 
 def read_drive(folder: str | Path) -> KittiDrive:
@@ -127,7 +132,7 @@ def read_oxts(folder: str | Path, frames: int) -> tuple[np.ndarray, np.ndarray]:
     data = folder / "data" if (folder / "data").is_dir() else folder
     if not data.is_dir():
         raise FootageError(f"oxts {str(folder)!r}: no such folder (a KITTI drive's oxts, holding data/*.txt)")
-    files = sorted(data.glob("*.txt"))
+    files = _files(data, ".txt")
     if len(files) != frames:
         raise FootageError(f"oxts {str(folder)!r}: {len(files)} oxts files for {frames} frames")
     rows = np.array([_oxts_values(p) for p in files]).reshape(len(files), OXTS_FIELDS)

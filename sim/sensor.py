@@ -174,7 +174,7 @@ def apply_effects(
     if e.jpeg_quality is not None:
         ok, buf = cv2.imencode(".jpg", cv2.cvtColor(out, cv2.COLOR_RGB2BGR), [cv2.IMWRITE_JPEG_QUALITY, e.jpeg_quality])
         out = cv2.cvtColor(cv2.imdecode(buf, cv2.IMREAD_COLOR), cv2.COLOR_BGR2RGB)
-    if effects.video_qp is not None:
+    if e.video_qp is not None:
         out = codec(out)
     return out
 

@@ -147,8 +147,12 @@ class TextureBank:
         if kind not in TEXTURE_KINDS:
             raise ValueError(f"unknown texture kind {kind!r}")
         variant %= VARIANTS
-        style = self.vehicle_style(variant) if kind in VEHICLE_KINDS else self.ground
-        style = "fitting" if kind in FITTING_KINDS else style
+        if kind in FITTING_KINDS:
+            style = "fitting"  # the same in every vehicle style
+        elif kind in VEHICLE_KINDS:
+            style = self.vehicle_style(variant)
+        else:
+            style = self.ground
         p = self.dir / f"{style}_{kind}_{palette_index}_{variant}.png"
         if not p.exists():
             rng = np.random.default_rng([self.seed, TEXTURE_KINDS.index(kind), palette_index, variant])
