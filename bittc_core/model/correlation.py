@@ -12,7 +12,7 @@ product f_ref * f_src):
 
 with o = (-1, 0, +1). Where the pixel's eta is eta_i, the middle one peaks; which of the
 outer ones is larger says on which side of the threshold eta lies. Shapes: reference
-(B, C, h, w), warps (B*K, C, ., .) batch-major -> (B*K, 3G, hp, wp) on the padded grid.
+(B, C, h, w), warps (B*K, C, ., .) batch-major -> (B*K, 3G, h, w) on the unpadded map.
 """
 
 from __future__ import annotations
@@ -28,12 +28,20 @@ CORR_OFFSETS = (-1.0, 0.0, 1.0)
 
 
 def group_correlation(ref: torch.Tensor, warped: torch.Tensor, groups: int) -> torch.Tensor:
-    """ref (B, C, h, w), warped (B*K, C, h, w) -> (B*K, G, h, w), mean product per group."""
+    """ref (B, C, h, w), warped (B*K, C, h, w) -> (B*K, G, h, w), mean product per group.
+    Channels-last inputs (channels innermost, a crop of such a map included) give a
+    channels-last output, with no layout change."""
     b, c, h, w = ref.shape
     if c % groups:
         raise ValueError(f"group_correlation: {c} channels do not split into {groups} groups")
     k = warped.shape[0] // b
-    prod = warped.view(b, k, groups, c // groups, h, w) * ref.view(b, 1, groups, c // groups, h, w)
+    n = c // groups
+    if not torch.compiler.is_compiling() and c > 1 and warped.stride(1) == 1 and ref.stride(1) == 1:
+        prod = warped.permute(0, 2, 3, 1).reshape(b, k, h, w, groups, n) * ref.permute(0, 2, 3, 1).reshape(
+            b, 1, h, w, groups, n
+        )
+        return prod.mean(dim=-1).view(b * k, h, w, groups).permute(0, 3, 1, 2)
+    prod = warped.view(b, k, groups, n, h, w) * ref.view(b, 1, groups, n, h, w)
     return prod.mean(dim=3).view(b * k, groups, h, w)
 
 
@@ -46,12 +54,14 @@ def scale_correlation(
     groups: int,
     log_step: float,
 ) -> torch.Tensor:
-    """Correlation volume of the three warps about each eta (B, K) -> (B*K, 3G, hp, wp).
+    """Correlation volume of the three warps about each eta (B, K) -> (B*K, 3G, h, w), on
+    the unpadded map.
 
     ``ref`` (B, C, h, w) are the unpadded reference features, ``warped`` is
     ``scale_warp(src, eta, grid)``, already computed for SegNet's input. The reference is
     zero in the padding, so is the correlation there: it is computed on the unpadded map
-    only (the outer warps too) and zero-padded."""
+    only (the outer warps too) and never padded; SegNet places what its convs make of it
+    (``SegNet2D.forward``)."""
     parts = []
     for offset in CORR_OFFSETS:
         if offset == 0.0:
@@ -59,4 +69,4 @@ def scale_correlation(
         else:
             w = scale_warp(src, eta * math.exp(offset * log_step), grid, unpadded=True)
         parts.append(group_correlation(ref, w, groups))
-    return grid.pad(torch.cat(parts, dim=1))
+    return torch.cat(parts, dim=1)

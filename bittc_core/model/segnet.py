@@ -80,6 +80,13 @@ def _broadcast_add(ref: torch.Tensor, per_hyp: torch.Tensor) -> torch.Tensor:
     return out.view(b * k, *per_hyp.shape[1:])
 
 
+def _pad_to(x: torch.Tensor, top: int, left: int, size_hw: tuple[int, int]) -> torch.Tensor:
+    """Place (N, C, h, w) at (top, left) of a zero (N, C, H, W) map, cropping what falls outside."""
+    h, w = size_hw
+    x = x[..., : h - top, : w - left]
+    return F.pad(x, (left, w - left - x.shape[-1], top, h - top - x.shape[-2]))
+
+
 class GlobalContext(nn.Module):
     """x (N, C, h, w) -> x + expand(LeakyReLU(reduce(mean_hw(x)))), identity at init."""
 
@@ -161,19 +168,32 @@ class SegNet2D(nn.Module):
         feat = grid.crop(ref_padded) if self.corr_first is not None else None
         return ReferenceTerms(first=self.first_ref(ref_padded), skip=skip, feat=feat)
 
+    def _corr_first(self, corr: torch.Tensor, grid: PaddedGrid, size_hw: tuple[int, int]) -> torch.Tensor:
+        """``corr_first`` (3x3, stride 2, zero padding 1) of the zero-padded volume, from the
+        unpadded one: the conv runs on the map with one zero row and column after it and,
+        where the map starts at an odd padded row (column), one before it, so that its
+        outputs fall on the padded grid's even rows (columns); every output it leaves out
+        sees only zeros."""
+        pt, pl = grid.top % 2, grid.left % 2
+        out = self.corr_first(F.pad(corr, (pl, 1, pt, 1)))
+        return _pad_to(out, (grid.top - pt) // 2, (grid.left - pl) // 2, size_hw)
+
     def forward(
         self, ref: ReferenceTerms, warped: torch.Tensor, grid: PaddedGrid, corr: torch.Tensor | None = None
     ) -> torch.Tensor:
         """warped (B*K, C, hp, wp) -> logits (B*K, 3, h, w), cropped to the unpadded map.
-        ``corr`` (B*K, 3G, hp, wp): the correlation volume, when the config has one and
-        the hypothesis is a scale (the binary-flow heads run without it).
+        ``corr`` (B*K, 3G, h, w): the correlation volume on the unpadded map, when the config
+        has one and the hypothesis is a scale (the binary-flow heads run without it). It
+        is zero in the padding, so its convs (no bias) run on the map alone and their
+        outputs are zero-padded into place (``_corr_first``), which is exactly their result
+        on the padded volume.
 
         The finest level's convs only run on the crop plus a margin of 1 px per 3x3 conv:
         the result inside is exactly that of running them on the whole padded map (the
         margin covers their receptive field; beyond the padded map both see zeros)."""
         first = self.first_src(warped)
         if corr is not None:
-            first = first + self.corr_first(corr)
+            first = first + self._corr_first(corr, grid, first.shape[-2:])
         x = self.first_post(_broadcast_add(ref.first, first))
         skips = [self.first_conv2(x)]
         for block in self.down:
@@ -189,7 +209,7 @@ class SegNet2D(nn.Module):
         box = _MarginBox.around(grid, margin=2 + 2 * len(finest_extra))
         x = self.last_dec(box.cut(x))
         if corr is not None:
-            x = x + self.corr_last(box.cut(corr))
+            x = x + _pad_to(self.corr_last(corr), box.inner_top, box.inner_left, x.shape[-2:])
         if self.full_res_skip:
             x = _broadcast_add(box.cut(ref.skip), x + self.last_src(box.cut(warped)))
         return box.inner(self.head(finest_extra(self.last_post(x))))
