@@ -236,3 +236,12 @@ def test_flow_baseline_recovers_a_pure_expansion():
     assert abs(np.median(inner) - 0.9) < 0.02  # approaching plane: eta < 1, right direction
     g = flow.geofence(s["image_prev"], s["image_latest"], [0.5, 3.0])  # tau = 0.9 s
     assert g[0][16:-16, 16:-16].mean() < 0.2 and g[1][16:-16, 16:-16].mean() > 0.8
+
+
+def test_dataset_evaluation_refuses_pairs_at_another_frame_interval():
+    from bittc_core.dataset_eval import evaluate
+    from bittc_core.errors import ConfigError
+
+    oracle = OracleEstimator(dt_s=0.1)
+    with pytest.raises(ConfigError, match=r"sample 0: dt_s=0.2 s but the estimator works at 0.1 s"):
+        evaluate(oracle, [{"dt_s": 0.2}], limit=None)

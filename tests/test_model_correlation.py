@@ -7,7 +7,7 @@ import pytest
 import torch
 
 from bittc_core.model.correlation import CORR_OFFSETS, group_correlation, scale_correlation
-from bittc_core.model.segnet import SegNet2D, _MarginBox, _pad_to
+from bittc_core.model.segnet import SegNet2D
 from bittc_core.model.warp import PaddedGrid, scale_warp
 
 
@@ -53,26 +53,42 @@ def test_unpadded_computation_equals_the_padded_one():
     torch.testing.assert_close(grid.pad(out), expected)
 
 
-@pytest.mark.parametrize("h, w", [(10, 14), (11, 13), (16, 32), (7, 9)])
+class _PaddedCorrSegNet(SegNet2D):
+    """SegNet with its correlation convs run on the zero-padded volume (the reference)."""
+
+    def _corr_first(self, corr, grid, size_hw):
+        return self.corr_first(grid.pad(corr))
+
+    def _corr_last(self, corr, box, size_hw):
+        grid = PaddedGrid(box.h, box.w, self._hp, self._wp, box.top + box.inner_top, box.left + box.inner_left)
+        return self.corr_last(box.cut(grid.pad(corr)))
+
+
+@pytest.mark.parametrize("h, w", [(10, 14), (11, 13), (16, 32), (7, 9), (9, 20)])
 def test_segnet_places_its_correlation_convs_as_on_the_padded_volume(h, w):
-    """The convs of the unpadded volume, placed on the padded grid, equal the convs of the
-    zero-padded volume: at odd and even offsets of the map, and with no padding at all."""
+    """SegNet's output with the convs of the unpadded volume placed on the padded grid equals
+    its output with the convs run on the zero-padded volume: at odd and even offsets of the
+    map, and with no padding at all."""
     g = torch.Generator().manual_seed(4)
-    net = SegNet2D(
-        feat_channels=4, enc_channels=(6, 8), dec_channels=(8, 6), full_res_skip=True, norm="none", corr_channels=6
-    ).eval()
-    for layer in (net.corr_first, net.corr_last):
-        layer.weight.data.normal_(generator=g)
+    kw = dict(feat_channels=4, enc_channels=(6, 8), dec_channels=(8, 6), full_res_skip=True, norm="none")
+    net = SegNet2D(**kw, corr_channels=6).eval()
+    ref_net = _PaddedCorrSegNet(**kw, corr_channels=6).eval()
+    for p in net.parameters():
+        p.data.normal_(0.0, 0.3, generator=g)
+    ref_net.load_state_dict(net.state_dict())
     for pad_factor in (1.5, 1.0):
         grid = PaddedGrid.for_features(h, w, pad_factor, 4)
-        corr = torch.randn(3, 6, h, w, generator=g)
-        first_size = ((grid.hp + 1) // 2, (grid.wp + 1) // 2)
-        torch.testing.assert_close(net._corr_first(corr, grid, first_size), net.corr_first(grid.pad(corr)))
-        box = _MarginBox.around(grid, margin=2)
-        placed = net.corr_last(box.cut(grid.pad(corr)))
-        torch.testing.assert_close(
-            _pad_to(net.corr_last(corr), box.inner_top, box.inner_left, placed.shape[-2:]), placed
-        )
+        ref_net._hp, ref_net._wp = grid.hp, grid.wp
+        feat_ref, src = torch.randn(1, 4, h, w, generator=g), torch.randn(1, 4, h, w, generator=g)
+        eta = torch.tensor([[0.8, 0.95]])
+        warped = scale_warp(src, eta, grid)
+        corr = torch.randn(2, 6, h, w, generator=g)
+        with torch.no_grad():
+            out = net(net.prepare(grid.pad(feat_ref), grid), warped, grid, corr)
+            expected = ref_net(ref_net.prepare(grid.pad(feat_ref), grid), warped, grid, corr)
+        assert out.shape == (2, 3, h, w)
+        torch.testing.assert_close(out, expected)
+        assert not torch.allclose(out, net(net.prepare(grid.pad(feat_ref), grid), warped, grid, None))
 
 
 def test_outer_warps_tell_the_side_of_the_threshold():

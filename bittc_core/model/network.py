@@ -139,10 +139,8 @@ class BinaryTTCNet(nn.Module):
             coarse = self._coarse(ctx, warped, slice(HEAD_TTC, HEAD_TTC + 1), corr)
             coarse = coarse.view(b, part.shape[1], *coarse.shape[-2:])
             # the full-resolution refiner runs one threshold at a time: on a CPU a batch of
-            # full-size maps falls out of cache and costs ~2x more per map (96x288, 2 cores);
-            # each map is made contiguous first: a channel sliced out of a channels-last batch
-            # is strided, and the 1-channel conv then falls back to a slow path (~8x at 96x144)
-            refined += [self.refine(ctx.guide, coarse[:, i : i + 1].contiguous()) for i in range(part.shape[1])]
+            # full-size maps falls out of cache and costs ~2x more per map (96x288, 2 cores)
+            refined += [self.refine(ctx.guide, coarse[:, i : i + 1]) for i in range(part.shape[1])]
         return torch.cat(refined, dim=1)
 
     def classify_shift(self, ctx: ReferenceContext, feat_src: torch.Tensor, shift_px: torch.Tensor) -> torch.Tensor:

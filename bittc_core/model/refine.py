@@ -18,7 +18,7 @@ from bittc_core.model.extractor import IMAGE_MEAN, IMAGE_STD
 from bittc_core.model.layers import LEAKY_SLOPE, conv, growth_blocks
 from bittc_core.model.segnet import _broadcast_add
 
-#: below this many input elements torch runs a 3x3 conv of batch 1 on its native path
+#: up to this many input elements torch runs a 3x3 conv of batch 1 on its native path
 #: (aten ``use_mkldnn``), which is ~10x slower when the weight has channels-last strides
 _NATIVE_CONV_MAX_ELEMENTS = 20480
 
@@ -52,17 +52,17 @@ class SegRefineNet(nn.Module):
         memory layout; on a CPU a small map (the fovea's 96x144) takes torch's native conv
         path, which is fast only with plain strides (0.05 against 0.49 ms, 2 threads), and
         a large one oneDNN's, fast with the channels-last strides of a channels-last
-        network: so a small map gets a plain copy of the 72 weights (not in a traced or
-        exported graph, whose sizes are symbols and whose runtime picks its own kernels)."""
+        network: so a single small map gets a plain-strided view of the 72 weights (not in
+        a traced or exported graph, whose sizes are symbols and whose runtime picks its own
+        kernels)."""
         w = self.first_logit.weight
         if (
             not torch.compiler.is_compiling()
             and logit.device.type == "cpu"
+            and logit.shape[0] == 1
             and logit.numel() <= _NATIVE_CONV_MAX_ELEMENTS
         ):
-            plain = torch.empty(w.shape, dtype=w.dtype)
-            if plain.stride() != w.stride():
-                w = plain.copy_(w)
+            w = w.view(w.shape[0], -1).view(w.shape)  # the same weights with plain strides (no copy)
         return self.first_logit._conv_forward(logit, w, None)
 
     def forward(self, guide_terms: torch.Tensor, logit: torch.Tensor) -> torch.Tensor:

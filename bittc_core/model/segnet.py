@@ -178,6 +178,11 @@ class SegNet2D(nn.Module):
         out = self.corr_first(F.pad(corr, (pl, 1, pt, 1)))
         return _pad_to(out, (grid.top - pt) // 2, (grid.left - pl) // 2, size_hw)
 
+    def _corr_last(self, corr: torch.Tensor, box: _MarginBox, size_hw: tuple[int, int]) -> torch.Tensor:
+        """``corr_last`` (1x1, no bias) of the zero-padded volume cut to ``box``: the conv of
+        the map, zero-padded into the box."""
+        return _pad_to(self.corr_last(corr), box.inner_top, box.inner_left, size_hw)
+
     def forward(
         self, ref: ReferenceTerms, warped: torch.Tensor, grid: PaddedGrid, corr: torch.Tensor | None = None
     ) -> torch.Tensor:
@@ -209,7 +214,7 @@ class SegNet2D(nn.Module):
         box = _MarginBox.around(grid, margin=2 + 2 * len(finest_extra))
         x = self.last_dec(box.cut(x))
         if corr is not None:
-            x = x + _pad_to(self.corr_last(corr), box.inner_top, box.inner_left, x.shape[-2:])
+            x = x + self._corr_last(corr, box, x.shape[-2:])
         if self.full_res_skip:
             x = _broadcast_add(box.cut(ref.skip), x + self.last_src(box.cut(warped)))
         return box.inner(self.head(finest_extra(self.last_post(x))))
