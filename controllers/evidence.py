@@ -21,14 +21,21 @@ from controllers.base import Calibration
 from controllers.road import corridor_columns, ground_depth_per_row, ground_ttc_per_row
 
 
-def standing_regions(mask: np.ndarray, lowest_row: int, contact_px: int) -> tuple[int, np.ndarray]:
+def standing_regions(
+    mask: np.ndarray, lowest_row: int, contact_px: int, min_rows: float = 0.0
+) -> tuple[int, np.ndarray]:
     """8-connected regions of a (H, W) bool mask whose bottom row is at least
-    ``lowest_row - contact_px`` -> (pixels of the largest, (H, W) bool mask of them all)."""
+    ``lowest_row - contact_px`` and that span at least ``min_rows`` rows -> (pixels of the
+    largest, (H, W) bool mask of them all). The height keeps out the fence's own edge on
+    the road: where the road's fence runs a little beyond the nominal boundary of the
+    counted rows, it leaves a strip one to three rows tall along the lowest counted row,
+    standing there like an obstacle of no height."""
     if not mask.any():
         return 0, np.zeros_like(mask)
     n, labels, stats, _ = cv2.connectedComponentsWithStats(mask.astype(np.uint8), connectivity=8)
     bottom = stats[1:, cv2.CC_STAT_TOP] + stats[1:, cv2.CC_STAT_HEIGHT] - 1
-    keep = np.flatnonzero(bottom >= lowest_row - contact_px) + 1
+    tall = stats[1:, cv2.CC_STAT_HEIGHT] >= min_rows
+    keep = np.flatnonzero((bottom >= lowest_row - contact_px) & tall) + 1
     if keep.size == 0:
         return 0, np.zeros_like(mask)
     return int(stats[keep, cv2.CC_STAT_AREA].max()), np.isin(labels, keep)

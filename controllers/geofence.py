@@ -36,7 +36,9 @@ estimator's map p_i = p(0 < tau <= tau_i)):
    area that ``min_face_m2`` of face covers at the fence's depth Z_i,
    fx fy A / Z_i^2 (a 1.7 x 1.5 m target at 53 m covers about 6 x 5 px; 0.3 m^2 at
    18 m is 30 px: a far target that the network puts into a near fence is too small
-   for it).
+   for it). With ``min_height_m`` it must also span that height at Z_i, fy h / Z_i rows:
+   the road's own fence, running a little past the counted rows' boundary, leaves strips
+   one to five rows tall along the lowest counted row (off by default: docs/sensor.md).
    Rows count only when the ground one row below them is
    outside the fence too (near the horizon one row spans tens of metres).
    A view whose pair turned by more than ``max_rotation_px`` (the fastest yaw rate within
@@ -192,9 +194,10 @@ class GeofenceController(Controller):
             region = corridor_mask(cal, bands[i], half_w, depth, curvature)
             lowest = int(np.flatnonzero(bands[i].any(axis=1)).max())
             inside = maps[i] > c.prob_inside
-            area, standing = standing_regions(inside & region, lowest, c.contact_px)
+            rows = cal.fy_px * c.min_height_m / depth if depth > 1e-6 else 0.0
+            area, standing = standing_regions(inside & region, lowest, c.contact_px, rows)
             need = self._need_px(cal, depth)
-            area_p, ahead = standing_regions(predicted & inside & bands[i], lowest, c.contact_px)
+            area_p, ahead = standing_regions(predicted & inside & bands[i], lowest, c.contact_px, rows)
             if area_p > area:
                 area, standing = area_p, ahead
             if area >= need:

@@ -72,6 +72,9 @@ class GeofenceConfig:
     corridor_margin_m: float = 0.25  # [m] beyond the ego's half width, each side
     min_region_px: int = 8  # [px] smallest connected in-path region
     min_face_m2: float = 0.3  # [m^2] smallest face an obstacle shows at the fence's depth
+    # [m] smallest height an in-path region spans at the fence's depth (0: off; 0.3 drops the
+    # road's own fence edge, a strip a few rows tall, but lost CBLA-25-50: docs/sensor.md)
+    min_height_m: float = 0.0
     contact_px: int = 2  # [px] a region's bottom lies at most this far above the lowest counted row
     nested: bool = True  # a fence's evidence counts only with evidence in a larger fence too
     persistence_frames: int = 2  # [jobs] consecutive jobs before a fence fires
@@ -93,6 +96,7 @@ class GeofenceConfig:
             "min_region_px": self.min_region_px >= 1,
             "contact_px": self.contact_px >= 0,
             "min_face_m2": self.min_face_m2 >= 0,
+            "min_height_m": self.min_height_m >= 0,
             "persistence_frames": self.persistence_frames >= 1,
             "release_frames": self.release_frames >= 1,
             "min_speed_mps": self.min_speed_mps >= 0,
