@@ -13,11 +13,11 @@ is asserted.
 from __future__ import annotations
 
 import argparse
-import time
 
 import numpy as np
 import torch
 
+from bittc_core.benchmark import _interleaved_median_ms
 from bittc_core.estimator import make_estimator
 from controllers.geofence import default_thresholds
 
@@ -32,24 +32,18 @@ def main() -> None:
     args = ap.parse_args()
     torch.set_num_threads(args.threads)
     base = make_estimator("bittc", device="cpu")
-    ests = [base.fork() for _ in SIZES]
     rng = np.random.default_rng(0)
-    frames = [[rng.integers(0, 256, (*hw, 3), dtype=np.uint8) for _ in range(args.calls + 6)] for hw, _ in SIZES]
     thr = default_thresholds(4)
-    times: list[list[float]] = [[] for _ in SIZES]
-    for j in range(args.calls + 5):
-        r = j % len(SIZES)
-        for i in list(range(r, len(SIZES))) + list(range(r)):
-            k = SIZES[i][1]
-            t0 = time.perf_counter()
-            ests[i].geofence(frames[i][j], frames[i][j + 1], thr[-k:])
-            if j >= 5:
-                times[i].append(time.perf_counter() - t0)
+    calls = {}
+    for i, (hw, k) in enumerate(SIZES):
+        est, frames = base.fork(), [rng.integers(0, 256, (*hw, 3), dtype=np.uint8) for _ in range(args.calls + 6)]
+        calls[i] = lambda a, b, est=est, frames=frames, k=k: est.geofence(frames[a], frames[b], thr[-k:])
+    ms = _interleaved_median_ms(calls, list(range(args.calls + 6)), warmup=5)  # frames by index, each size its own
     print(f"streaming geofence calls, {args.threads} threads, {args.calls} interleaved rounds, shipped weights")
     print(f"{'view [px]':>10}{'fences':>8}{'pixels / wide':>15}{'median ms':>11}")
     wide = SIZES[0][0][0] * SIZES[0][0][1]
-    for ((h, w), k), ts in zip(SIZES, times):
-        print(f"{h:>4}x{w:<5}{k:>8}{h * w / wide:>15.3f}{np.median(ts) * 1e3:>11.2f}")
+    for i, ((h, w), k) in enumerate(SIZES):
+        print(f"{h:>4}x{w:<5}{k:>8}{h * w / wide:>15.3f}{ms[i]:>11.2f}")
 
 
 if __name__ == "__main__":
