@@ -28,7 +28,7 @@ def standing_regions(
     ``lowest_row - contact_px`` and that span at least ``min_rows`` rows -> (pixels of the
     largest, (H, W) bool mask of them all). The height keeps out the fence's own edge on
     the road: where the road's fence runs a little beyond the nominal boundary of the
-    counted rows, it leaves a strip one to three rows tall along the lowest counted row,
+    counted rows, it leaves a strip a few rows tall along the lowest counted row,
     standing there like an obstacle of no height."""
     if not mask.any():
         return 0, np.zeros_like(mask)

@@ -190,8 +190,8 @@ class SegNet2D(nn.Module):
         ``corr`` (B*K, 3G, h, w): the correlation volume on the unpadded map, when the config
         has one and the hypothesis is a scale (the binary-flow heads run without it). It
         is zero in the padding, so its convs (no bias) run on the map alone and their
-        outputs are zero-padded into place (``_corr_first``), which is exactly their result
-        on the padded volume.
+        outputs are zero-padded into place (``_corr_first``, ``_corr_last``): their result on
+        the padded volume, up to float rounding.
 
         The finest level's convs only run on the crop plus a margin of 1 px per 3x3 conv:
         the result inside is exactly that of running them on the whole padded map (the

@@ -57,7 +57,7 @@ def add_parser(sub) -> argparse.ArgumentParser:
         default="plain",
         help="vehicle paint and glass: plain (default, as in bittc_v1 and bittc_v2), detailed (shading "
         "and spots inside the outline whose motion can be measured, as in bittc_v3), mixed (half the "
-        "texture variants of each colour plain, half detailed, as in bittc_v5) dressed (detailed, windows in "
+        "texture variants of each colour plain, half detailed, as in bittc_v5), dressed (detailed, windows in "
         "frames, number plates and lamps) or assorted (a third each plain, detailed and dressed)",
     )
     p.add_argument(

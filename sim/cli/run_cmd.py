@@ -97,7 +97,7 @@ def add_camera_flags(p: argparse.ArgumentParser) -> None:
         "--vehicle-texture",
         default="plain",
         help="vehicle paint and glass: plain (default, as in datasets bittc_v1 and bittc_v2), detailed "
-        "(as in bittc_v3), mixed (half the texture variants of each colour detailed, as in bittc_v5 and bittc_v6) , "
+        "(as in bittc_v3), mixed (half the texture variants of each colour detailed, as in bittc_v5 and bittc_v6), "
         "dressed (detailed, windows in frames, number plates and lamps) or assorted (a third each plain, detailed, "
         "dressed)",
     )
