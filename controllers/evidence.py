@@ -41,6 +41,12 @@ def standing_regions(
     return int(stats[keep, cv2.CC_STAT_AREA].max()), np.isin(labels, keep)
 
 
+def need_px(cal: Calibration, depth_m: float, min_region_px: float, min_face_m2: float) -> float:
+    """[px] the smallest standing region that counts at a fence's static depth ``depth_m``:
+    at least ``min_region_px``, and the area a face of ``min_face_m2`` covers there."""
+    return max(min_region_px, cal.fx_px * cal.fy_px * min_face_m2 / depth_m**2 if depth_m > 1e-6 else 0.0)
+
+
 def ground_ttc_map(cal: Calibration, speed_mps: float, yaw_rate_radps: float = 0.0) -> np.ndarray:
     """(H, W) camera-plane TTC [s] of the static ground seen at each pixel (+inf where it
     does not approach: above the horizon, at standstill)."""
@@ -101,27 +107,43 @@ def contact_depth(fenced: np.ndarray, mask: np.ndarray, u0: int, u1: int, ground
     return z if math.isfinite(z) else None
 
 
+def inner_edge_slant(mask: np.ndarray, left_of_centre: bool) -> float:
+    """[px per row] how fast a region's inner edge (its column nearest the image centre in
+    each row) moves outwards, away from the centre, row by row downwards (least squares;
+    0 for a region one row tall). An upright object's edge is vertical (about 0); a strip of
+    ground along the road at lateral offset X, seen from height h, slants outwards at
+    X / h px per row (square pixels): its nearer rows lie further out."""
+    rows = np.flatnonzero(mask.any(axis=1))
+    if rows.size < 2:
+        return 0.0
+    cols = [np.flatnonzero(mask[r]) for r in rows]
+    inner = np.array([c.max() if left_of_centre else c.min() for c in cols], dtype=np.float64)
+    slope = float(np.polyfit(rows.astype(np.float64), inner, 1)[0])
+    return -slope if left_of_centre else slope
+
+
 def fenced_blobs(
     inside: np.ndarray,
+    touch: np.ndarray,
     maps: np.ndarray,
     thr: np.ndarray,
     prob_inside: float,
-    lowest: int,
-    contact_px: int,
     need_px: float,
     ground_depth: np.ndarray,
 ) -> list[Blob]:
-    """Standing regions of ``inside`` (the largest fence's counted inside pixels) of at least
-    ``need_px`` pixels, each with the smallest fence of ``thr`` that holds half of it and
-    the depth where it stands (``contact_depth`` in that fence; ``ground_depth``: (H,) per
-    row [m])."""
+    """Regions of ``inside`` (counted inside pixels, (H, W) bool) that stand on the road,
+    i.e. hold a pixel of ``touch`` (the rows where a standing region's bottom lies), of at
+    least ``need_px`` pixels, each with the smallest fence of ``thr`` that holds half of it
+    and the depth where it stands (``contact_depth`` in that fence; ``ground_depth``: (H,)
+    per row [m])."""
     if not inside.any():
         return []
     n, labels, stats, _ = cv2.connectedComponentsWithStats(inside.astype(np.uint8), connectivity=8)
+    standing = np.zeros(n, dtype=bool)
+    standing[labels[touch & inside]] = True
     out = []
     for k in range(1, n):
-        top, h, area = stats[k, cv2.CC_STAT_TOP], stats[k, cv2.CC_STAT_HEIGHT], stats[k, cv2.CC_STAT_AREA]
-        if top + h - 1 < lowest - contact_px or area < need_px:
+        if not standing[k] or stats[k, cv2.CC_STAT_AREA] < need_px:
             continue
         m = labels == k
         shares = [(maps[i][m] > prob_inside).mean() for i in range(len(thr))]

@@ -20,9 +20,11 @@ estimator's map p_i = p(0 < tau <= tau_i)):
    on each side, along its path (straight, or bent by its yaw rate:
    ``controllers.evidence``), projected at the depth Z_i = s cos p tau_i of a static
    point on the fence. Or a fenced region anywhere across the view that the tracker
-   (``controllers.tracker``: regions followed over jobs, their motion over the ground,
-   the ego's path ahead) predicts into the ego's footprint within its TTC: a pedestrian
-   stepping out, a car crossing a junction, an oncoming car the ego turns across. An
+   (``controllers.path_prediction``, ``controllers.tracker``: regions followed over jobs,
+   their motion over the ground, the ego's path ahead, the fovea's finer bearings)
+   predicts into the ego's footprint within its TTC: a pedestrian stepping out, a car
+   crossing a junction, a van merging from the next lane, an oncoming car the ego turns
+   across. An
    actor inside the fence is at most that far if it does not close faster than the ego
    drives, so an adjacent-lane car (static, slower or same-direction) lies outside these
    columns; an oncoming car in the next lane closes faster and could enter them only
@@ -97,7 +99,7 @@ import time
 import numpy as np
 
 from controllers.base import BrakeCommand, Calibration, Controller, GeofenceView, Observation
-from controllers.evidence import corridor_mask, counted_pixels, fenced_blobs, ground_ttc_map, standing_regions
+from controllers.evidence import corridor_mask, counted_pixels, ground_ttc_map, need_px, standing_regions
 from controllers.geofence_config import (  # noqa: F401  (re-exported: the controller's settings)
     DEFAULT_FOVEA_FENCES_FROM_S,
     DEFAULT_FRAME_STRIDE,
@@ -111,9 +113,9 @@ from controllers.geofence_config import (  # noqa: F401  (re-exported: the contr
     estimator_thresholds,
     frame_stride_ok,
 )
-from controllers.road import ground_depth_per_row, static_depth_m
+from controllers.path_prediction import PathPrediction
+from controllers.road import static_depth_m
 from controllers.stages import StagedBrake
-from controllers.tracker import BlobTracker, Odometry
 
 
 def nearest_log(values: np.ndarray, target: float) -> int:
@@ -165,28 +167,30 @@ class GeofenceController(Controller):
             if hasattr(est, "reset"):
                 est.reset()
         self._stages.reset()
-        self._trackers = {v: BlobTracker(self.cfg.tracker, self._cals[v]) for v in self._fences}
-        self._ground_depth = {v: ground_depth_per_row(self._cals[v]) for v in self._fences}
-        self._odometry = Odometry()
+        self._paths = PathPrediction(self.cfg, {v: self._cals[v] for v in self._fences})
         self._yaws: list[tuple[float, float]] = []  # (t [s], |yaw rate| [rad/s]) of the recent jobs
         self._streak = {v: np.zeros(len(f), dtype=np.int64) for v, f in self._fences.items()}
         self._quiet = self.cfg.release_frames  # nothing to hold at the start
         self._last = BrakeCommand()
 
+    def _bands(self, view: str, thr: np.ndarray, speed_mps: float, yaw_rate: float) -> list[np.ndarray]:
+        """(H, W) bool per fence of ``thr``: the pixels where it can be judged (rule 2)."""
+        tau_ground = ground_ttc_map(self._cals[view], speed_mps, yaw_rate)
+        return [counted_pixels(tau_ground, tau, self.cfg.ground_margin) for tau in thr]
+
     def _evidence(
-        self, maps: np.ndarray, thr: np.ndarray, view: str, speed_mps: float, yaw_rate: float, t_s: float
+        self, maps: np.ndarray, thr: np.ndarray, bands, view: str, speed_mps: float, yaw_rate: float, t_s: float
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
-        """Sorted (K, H, W) maps of fences ``thr`` [s] in ``view`` -> (in-path region size per
-        fence [px], counted mask, corridor mask, regions predicted into the path)."""
+        """Sorted (K, H, W) maps of fences ``thr`` [s] in ``view`` and their counted pixels
+        ``bands`` -> (in-path region size per fence [px], counted mask, corridor mask,
+        regions predicted into the path)."""
         c, cal = self.cfg, self._cals[view]
-        tau_ground = ground_ttc_map(cal, speed_mps, yaw_rate)
         curvature = yaw_rate / speed_mps if speed_mps > c.min_speed_mps else 0.0
         half_w = cal.ego_width_m / 2 + c.corridor_margin_m
         counted = np.zeros(maps.shape[1:], dtype=bool)
         corridor = np.zeros(maps.shape[1:], dtype=bool)
         sizes = np.zeros(len(thr), dtype=np.int64)
-        bands = [counted_pixels(tau_ground, tau, c.ground_margin) for tau in thr]
-        predicted = self._predicted(maps, thr, bands, view, speed_mps, yaw_rate, t_s)
+        predicted = self._paths.predicted(view, maps.shape[1:], t_s, speed_mps, yaw_rate)
         for i, tau in enumerate(thr):
             if not bands[i].any():
                 continue
@@ -196,7 +200,7 @@ class GeofenceController(Controller):
             inside = maps[i] > c.prob_inside
             rows = cal.fy_px * c.min_height_m / depth if depth > 1e-6 else 0.0
             area, standing = standing_regions(inside & region, lowest, c.contact_px, rows)
-            need = self._need_px(cal, depth)
+            need = need_px(cal, depth, c.min_region_px, c.min_face_m2)
             area_p, ahead = standing_regions(predicted & inside & bands[i], lowest, c.contact_px, rows)
             if area_p > area:
                 area, standing = area_p, ahead
@@ -205,29 +209,6 @@ class GeofenceController(Controller):
                 counted |= standing
             corridor |= region
         return sizes, counted, corridor, int(predicted.any())
-
-    def _need_px(self, cal: Calibration, depth_m: float) -> float:
-        """[px] the smallest standing region that counts at a fence's static depth (rule 4)."""
-        c = self.cfg
-        return max(c.min_region_px, cal.fx_px * cal.fy_px * c.min_face_m2 / depth_m**2 if depth_m > 1e-6 else 0.0)
-
-    def _predicted(self, maps, thr, bands, view: str, speed_mps: float, yaw_rate: float, t_s: float) -> np.ndarray:
-        """(H, W) bool: the regions of the largest fence, across the whole view, that the
-        tracker predicts into the ego's path (``controllers.tracker``)."""
-        c, cal = self.cfg, self._cals[view]
-        out = np.zeros(maps.shape[1:], dtype=bool)
-        if not c.tracker.enabled or view not in c.tracker.views or not bands[-1].any():
-            return out
-        depth = static_depth_m(cal, speed_mps, thr[-1])
-        need = self._need_px(cal, depth)
-        lowest = int(np.flatnonzero(bands[-1].any(axis=1)).max())
-        inside = (maps[-1] > c.prob_inside) & bands[-1]
-        blobs = fenced_blobs(inside, maps, thr, c.prob_inside, lowest, c.contact_px, need, self._ground_depth[view])
-        tracker = self._trackers[view]
-        for blob, track in zip(blobs, tracker.update(t_s, self._pose, speed_mps, blobs)):
-            if tracker.in_path(track, t_s, self._pose, speed_mps, yaw_rate):
-                out |= blob.mask
-        return out
 
     def _fired(self, view: str, sizes: np.ndarray) -> np.ndarray:
         """In-path region sizes of a view's fences -> which fences fire (nested, persistent)."""
@@ -243,7 +224,7 @@ class GeofenceController(Controller):
             raise RuntimeError("call reset(calibration) before act()")
         c, s = self.cfg, float(obs.ego_speed_mps)
         yaw = float(obs.ego_yaw_rate_radps)
-        self._pose = self._odometry.update(obs.t_s, s, yaw)
+        self._paths.start_job(obs.t_s, s, yaw)
         # the pair's rotation: the fastest yaw rate of the jobs within it, times its interval
         self._yaws = [(t, w) for t, w in self._yaws if t >= obs.t_s - obs.dt_s - 1e-6] + [(obs.t_s, abs(yaw))]
         turn_rad = max(w for _, w in self._yaws) * obs.dt_s
@@ -251,20 +232,27 @@ class GeofenceController(Controller):
         tel: dict = {}
         views: dict[str, GeofenceView] = {}
         fired_at: dict[str, float] = {}  # view -> smallest fired threshold [s]
+        jobs = {}  # view -> (maps, counted pixels per fence, or None where the pair turned too far)
         for v, idx in self._fences.items():
             prev, latest = obs.pair(v)
             if latest is None or prev is None:
                 raise ValueError(f"controller {self.name!r}: the observation has no {v} pair")
-            thr = self._thr[idx]
             t0 = time.perf_counter()
             maps = self._estimators[v].geofence(prev, latest, self._thr_est[idx])
             est_ms += (time.perf_counter() - t0) * 1e3
-            if turn_rad * self._cals[v].fx_px > c.max_rotation_px:  # the pair turned too far for this view
+            turned = turn_rad * self._cals[v].fx_px > c.max_rotation_px  # too far for this view
+            jobs[v] = (maps, None if turned else self._bands(v, self._thr[idx], s, yaw))
+            if not turned:  # every view's regions first: the fovea checks the wide view's
+                self._paths.observe(v, maps, self._thr[idx], jobs[v][1], s, obs.t_s)
+        for v, idx in self._fences.items():
+            thr = self._thr[idx]
+            maps, bands = jobs[v]
+            if bands is None:
                 self._streak[v][:] = 0
                 empty = np.zeros(maps.shape[1:], dtype=bool)
                 sizes, counted, corridor, n_pred = np.zeros(len(thr), dtype=np.int64), empty, empty, 0
             else:
-                sizes, counted, corridor, n_pred = self._evidence(maps, thr, v, s, yaw, obs.t_s)
+                sizes, counted, corridor, n_pred = self._evidence(maps, thr, bands, v, s, yaw, obs.t_s)
             tel[f"predicted_{v}"] = n_pred
             fired = self._fired(v, sizes)
             if fired.any():

@@ -24,18 +24,24 @@ Per job and view:
    cut) at Z_k, moved into one odometry frame by dead reckoning from the ego's speed and
    yaw rate, gives the target's velocity over the ground by a least-squares line over
    the last ``window`` jobs. A region across the centre is in the corridor now: the
-   corridor rule of ``controllers.geofence`` judges it; one that touches the image's side
-   is cut there and predicts nothing.
+   corridor rule of ``controllers.geofence`` judges it.
 4. **Predict**: the ego keeps its speed and yaw rate; the target keeps its velocity.
-   Sampled every ``step_s`` up to the track's TTC plus ``horizon_pad_s``: does the inner
-   edge (``target_half_length_m`` along the ego) enter the ego's footprint widened by
-   ``margin_m`` each side? Only a track whose inner edge's bearing (the ego's rotation
-   taken out) comes in or holds predicts: beside the path a standing object's bearing
-   always moves out as the ego approaches, at any depth, so no error of the depth (the
-   fences' TTC bounds are coarse) can bring it in. Tracks with fewer than ``min_hits`` regions, a ground speed
-   above ``max_speed_mps`` (a bad association) or below ``min_speed_mps`` (standing: the
-   corridor rule judges it; a turning ego's arc, held beyond the turn, would sweep the
-   kerbs and houses on its inside) predict nothing.
+   Sampled every ``step_s`` up to the track's TTC plus ``horizon_pad_s``: does the
+   target (``target_half_length_m`` along the ego; across it, from its inner edge
+   outwards by its region's width at its depth, or without end where the image's side
+   cuts the region: ``extent``) overlap the ego's footprint widened by ``margin_m`` each
+   side? A crossing car whose front has passed the path's centre still blocks it with
+   its body. Only a track whose inner edge's bearing (the ego's rotation taken out)
+   comes in, or moves out no faster than an edge that meets the camera plane inside the
+   corridor, predicts: beside the path a standing object's bearing moves out faster
+   than that as the ego approaches, at any depth, so no error of the depth (the fences'
+   TTC bounds are coarse) can bring it in. Tracks with fewer than ``min_hits`` regions,
+   a ground speed above ``max_speed_mps`` (a bad association) or below
+   ``min_speed_mps`` (standing: the corridor rule judges it; a turning ego's arc, held
+   beyond the turn, would sweep the kerbs and houses on its inside) predict nothing.
+
+The regions, and the fovea's check of the wide view's bearing test:
+``controllers.path_prediction``.
 
 Odometry: x [m] forward and y [m] left of the ego's footprint centre at the run's
 start, heading psi [rad]. Camera frame to ego frame: forward = Z + mount_forward_m,
@@ -71,6 +77,21 @@ class TrackerConfig:
     min_ttc_s: float = 0.2  # [s] the smallest TTC a depth is placed at
     max_speed_mps: float = 15.0  # [m/s] a faster fitted ground speed is a bad association
     min_speed_mps: float = 0.8  # [m/s] a slower target is standing: the corridor rule judges it
+    all_fences: bool = True  # regions of every fence where it is judged, not only the largest's
+    extent: bool = True  # a target spans its region's width (unbounded past a cut image side)
+    # [m] a region spans at least this height at the static depth of its fence: the road's
+    # own fence, running past a fence's counted rows, leaves strips a few rows tall
+    min_height_m: float = 0.5
+    # [px per row] a region whose inner edge slants outwards faster, row by row down, lies on
+    # the ground: a strip of verge or road that the network fenced along a fence's boundary
+    max_slant_px_per_row: float = 0.5
+    # the bearing test lets an inner edge move out as fast as one that meets the camera plane
+    # inside the corridor (False: it must come in or hold)
+    corridor_allowance: bool = True
+    # views whose tracks check the bearing test of the predicting views' tracks at the same
+    # bearing (within check_tol_px of the predicting view): the fovea sees it 4x finer
+    check_views: tuple[str, ...] = ("fovea",)
+    check_tol_px: float = 2.0
 
     def __post_init__(self) -> None:
         ok = (
@@ -85,6 +106,8 @@ class TrackerConfig:
             and self.step_s > 0
             and self.min_ttc_s > 0
             and 0 <= self.min_speed_mps < self.max_speed_mps
+            and self.min_height_m >= 0
+            and self.check_tol_px >= 0
         )
         if not ok:
             raise ValueError(f"TrackerConfig out of range: {self}")
@@ -110,6 +133,7 @@ class _Obs:
 class Track:
     obs: list[_Obs] = field(default_factory=list)
     missed: int = 0
+    refuted: bool = False  # a finer view found its bearing moving out: it predicts no more
 
     @property
     def centre_px(self) -> float:
@@ -180,30 +204,40 @@ class BlobTracker:
         self.tracks = [t for t in self.tracks if t.missed <= c.max_missed]
         return out
 
-    def _ground_points(self, tr: Track, t0: float) -> tuple[np.ndarray, np.ndarray] | None:
-        """(times (N,), odometry points (N, 2) of the inner edge); None when a region lies
-        across the image centre, or touches the image's side (cut there: where it ends is
-        not seen)."""
+    def _ground_points(self, tr: Track, t0: float) -> tuple[np.ndarray, np.ndarray, float] | None:
+        """(times (N,), odometry points (N, 2) of the inner edge, the latest region's extent
+        [m] beyond its inner edge); None when a region lies across the image centre, or,
+        without ``extent``, touches the image's side (cut there: where it ends is not
+        seen)."""
         cal, c = self.cal, self.cfg
         cos_p = math.cos(math.radians(cal.pitch_deg))
         ts, pts = [], []
         for o in tr.obs:
-            if o.u_left <= cal.cx_px <= o.u_right or o.u_left <= 0 or o.u_right >= cal.width_px - 1:
+            cut = o.u_left <= 0 or o.u_right >= cal.width_px - 1
+            if o.u_left <= cal.cx_px <= o.u_right or (cut and not c.extent):
                 return None
             z = max(o.speed_mps * cos_p * max(t0 - o.t_s, c.min_ttc_s), o.contact_depth_m or 0.0, 0.5)
             fwd, left = z + cal.mount_forward_m, -o.inner_bearing(cal) * z
             x, y, psi = o.pose
             pts.append((x + fwd * math.cos(psi) - left * math.sin(psi), y + fwd * math.sin(psi) + left * math.cos(psi)))
             ts.append(o.t_s)
-        return np.asarray(ts), np.asarray(pts)
+        # the lateral extent [m] beyond the inner edge: the region's width at its depth, or
+        # unbounded where the image's side cuts it
+        extent = math.inf if cut else (o.u_right - o.u_left + 1) / cal.fx_px * z
+        return np.asarray(ts), np.asarray(pts), extent if c.extent else 0.0
 
-    def _closing_in(self, tr: Track) -> bool:
+    def closing_in(self, tr: Track, t0: float) -> bool:
         """Whether the inner edge's bearing, with the ego's own rotation taken out, moves
-        towards the image centre over the window (least-squares slope <= 0): beside a
-        straight path a standing object's bearing always moves outwards as the ego
-        approaches, whatever its depth, while a target on a collision course keeps its
-        bearing or comes in."""
-        cal = self.cal
+        towards the image centre over the window, or out no faster than an edge that
+        meets the camera plane inside the ego's corridor (least-squares slope).
+
+        A target whose inner edge reaches the camera plane at a lateral offset X at t0
+        has bearing X / (s (t0 - t)) + const, moving out at X / (s (t0 - t)^2): beside
+        the path (|X| beyond the corridor's half width w) faster than w / (s (t0 -
+        t)^2), whatever its depth. t0 is an upper bound of the contact time (the fences
+        bound the TTC from above), so the allowance, taken at the window's first job, errs
+        small: a standing object beside the path is never let through."""
+        cal, c = self.cal, self.cfg
         ts, dist = [], []
         psi0 = tr.obs[0].pose[2]
         for o in tr.obs:
@@ -211,20 +245,30 @@ class BlobTracker:
             ts.append(o.t_s)
             dist.append(abs(bearing))
         ts = np.asarray(ts) - ts[0]
-        return float(np.polyfit(ts, dist, 1)[0]) <= 0.0 if np.ptp(ts) > 0 else False
+        if np.ptp(ts) <= 0:
+            return False
+        o = tr.obs[0]
+        closing_mps = o.speed_mps * math.cos(math.radians(cal.pitch_deg))
+        tau = max(t0 - o.t_s, c.min_ttc_s)
+        allowance = (
+            (cal.ego_width_m / 2 + c.margin_m) / (closing_mps * tau**2)
+            if closing_mps > 0 and c.corridor_allowance
+            else 0.0
+        )
+        return float(np.polyfit(ts, dist, 1)[0]) <= allowance
 
     def in_path(self, tr: Track, t_s: float, pose, speed_mps: float, yaw_rate_radps: float) -> bool:
         """Whether track ``tr`` is predicted to enter the ego's widened footprint within its TTC."""
         c, cal = self.cfg, self.cal
         if len(tr.obs) < c.min_hits or speed_mps <= 0:
             return False
-        if not self._closing_in(tr):
-            return False
         t0 = tr.contact_time_s()
+        if not self.closing_in(tr, t0):
+            return False
         placed = self._ground_points(tr, t0)
         if placed is None:
             return False
-        ts, pts = placed
+        ts, pts, extent_m = placed
         tm = ts.mean()
         A = np.stack([np.ones_like(ts), ts - tm], axis=1)
         coef, *_ = np.linalg.lstsq(A, pts, rcond=None)
@@ -247,4 +291,9 @@ class BlobTracker:
         left = -dx * np.sin(heading) + dy * np.cos(heading)
         reach_l = cal.ego_length_m / 2 + c.target_half_length_m
         reach_w = cal.ego_width_m / 2 + c.margin_m
-        return bool(np.any((np.abs(fwd) <= reach_l) & (np.abs(left) <= reach_w)))
+        # the target spans from its inner edge outwards, away from the image centre, by its
+        # extent (ego frame: left of the centre is + left)
+        outwards = 1.0 if tr.obs[-1].u_right < cal.cx_px else -1.0
+        far = left + outwards * extent_m if math.isfinite(extent_m) else np.full_like(left, outwards * np.inf)
+        lo, hi = np.minimum(left, far), np.maximum(left, far)
+        return bool(np.any((np.abs(fwd) <= reach_l) & (lo <= reach_w) & (hi >= -reach_w)))

@@ -1,0 +1,118 @@
+"""The geofence controller's in-path prediction: per view, the fenced regions that the
+tracker (``controllers.tracker``) follows, and which of them it predicts into the ego's
+path.
+
+Regions (``TrackerConfig.all_fences``): each fence's inside pixels on the rows where that
+fence can be judged (the ground there lies clearly outside it: ``controllers.evidence.
+counted_pixels``), joined over the fences; a region stands on the road when it reaches
+down to the lowest such rows of a fence. At 50 km/h the largest fence is judged only near
+the horizon, above a crossing cyclist's wheels; the smaller fences see it lower down. A
+region must stand up like a road user (``_upright``): span ``min_height_m`` at the static
+depth of its fence, and have an inner edge that does not slant outwards row by row like
+a strip of verge that the network fenced along a fence's boundary.
+
+The check (``TrackerConfig.check_views``): the wide view predicts, and the fovea, which
+sees the same bearings four times finer, checks its bearing test. A wide track predicted
+into the path is dropped when a fovea track whose inner edge lies at the same bearing
+(within ``check_tol_px`` of the wide view) has enough regions and fails the bearing test:
+a fence's edge in the wide view can stand still for half a second on a parked truck's far
+corner while its true bearing moves out by three pixels.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from controllers.base import Calibration
+from controllers.evidence import Blob, fenced_blobs, inner_edge_slant, need_px
+from controllers.road import ground_depth_per_row, static_depth_m
+from controllers.tracker import BlobTracker, Odometry, Track
+
+
+class PathPrediction:
+    """Regions, tracks and predictions of every view that tracks (see the module docstring)."""
+
+    def __init__(self, cfg, cals: dict[str, Calibration]) -> None:
+        self.cfg = cfg  # GeofenceConfig
+        t = cfg.tracker
+        self.cals = cals
+        self.views = tuple(v for v in cals if t.enabled and (v in t.views or v in t.check_views))
+        self.trackers = {v: BlobTracker(t, cals[v]) for v in self.views}
+        self.ground_depth = {v: ground_depth_per_row(cals[v]) for v in self.views}
+        self.odometry = Odometry()
+        self.pose = (0.0, 0.0, 0.0)
+        self._seen: dict[str, list[tuple[Blob, Track]]] = {}
+
+    def start_job(self, t_s: float, speed_mps: float, yaw_rate_radps: float) -> None:
+        """Dead-reckon the ego's pose to this job; forget the last job's regions."""
+        self.pose = self.odometry.update(t_s, speed_mps, yaw_rate_radps)
+        self._seen = {}
+
+    def observe(self, view: str, maps: np.ndarray, thr: np.ndarray, bands: list, speed_mps: float, t_s: float):
+        """Extract the regions of ``view`` (sorted (K, H, W) maps of fences ``thr`` [s],
+        ``bands``: each fence's counted pixels) and associate them with its tracks."""
+        if view not in self.views or not bands[-1].any():
+            return
+        c, t, cal = self.cfg, self.cfg.tracker, self.cals[view]
+        need = need_px(cal, static_depth_m(cal, speed_mps, thr[-1]), c.min_region_px, c.min_face_m2)
+        inside = np.zeros(maps.shape[1:], dtype=bool)
+        touch = np.zeros_like(inside)
+        for i in range(len(thr)) if t.all_fences else [len(thr) - 1]:
+            if not bands[i].any():
+                continue
+            inside |= (maps[i] > c.prob_inside) & bands[i]
+            lowest = int(np.flatnonzero(bands[i].any(axis=1)).max())
+            rows = slice(max(lowest - c.contact_px, 0), lowest + 1)
+            touch[rows] |= bands[i][rows]
+        blobs = [
+            b
+            for b in fenced_blobs(inside, touch, maps, thr, c.prob_inside, need, self.ground_depth[view])
+            if self._upright(b, cal, speed_mps)
+        ]
+        tracks = self.trackers[view].update(t_s, self.pose, speed_mps, blobs)
+        self._seen[view] = list(zip(blobs, tracks))
+
+    def predicted(self, view: str, shape: tuple[int, int], t_s: float, speed_mps: float, yaw_rate: float):
+        """(H, W) bool: this job's regions of ``view`` predicted into the ego's path."""
+        out = np.zeros(shape, dtype=bool)
+        if view not in self.views or view not in self.cfg.tracker.views:
+            return out
+        tracker = self.trackers[view]
+        for blob, track in self._seen.get(view, []):
+            if tracker.in_path(track, t_s, self.pose, speed_mps, yaw_rate) and not self._refuted(view, track):
+                out |= blob.mask
+        return out
+
+    def _refuted(self, view: str, track: Track) -> bool:
+        """Whether a finer view sees, or once saw, the track's inner edge and finds its
+        bearing moving out; a refuted track stays so (its edge may later leave that view,
+        or join another region)."""
+        if track.refuted:
+            return True
+        t, cal = self.cfg.tracker, self.cals[view]
+        bearing = track.obs[-1].inner_bearing(cal)
+        tol = t.check_tol_px / cal.fx_px
+        for v in t.check_views:
+            if v == view or v not in self._seen:
+                continue
+            checker = self.trackers[v]
+            for _, other in self._seen[v]:
+                if len(other.obs) < t.min_hits or abs(other.obs[-1].inner_bearing(self.cals[v]) - bearing) > tol:
+                    continue
+                if not checker.closing_in(other, other.contact_time_s()):
+                    track.refuted = True
+                    return True
+        return False
+
+    def _upright(self, blob: Blob, cal: Calibration, speed_mps: float) -> bool:
+        """Whether a fenced region stands up like a road user, not flat on the ground: it
+        spans ``TrackerConfig.min_height_m`` at the static depth of its fence, and its inner
+        edge does not slant outwards like a strip of ground along the road."""
+        t = self.cfg.tracker
+        rows = np.flatnonzero(blob.mask.any(axis=1))
+        depth = max(static_depth_m(cal, speed_mps, blob.tau_bound_s), 1e-6)
+        if rows[-1] - rows[0] + 1 < cal.fy_px * t.min_height_m / depth:
+            return False
+        if blob.u_left <= cal.cx_px <= blob.u_right:  # across the centre: the corridor rule judges it
+            return True
+        return inner_edge_slant(blob.mask, blob.u_right < cal.cx_px) <= t.max_slant_px_per_row
