@@ -21,12 +21,35 @@ corner while its true bearing moves out by three pixels.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from controllers.base import Calibration
 from controllers.evidence import Blob, fenced_blobs, inner_edge_slant, need_px
 from controllers.road import ground_depth_per_row, static_depth_m
-from controllers.tracker import BlobTracker, Odometry, Track
+from controllers.tracker import BlobTracker, Track
+
+
+class Odometry:
+    """Dead reckoning of the ego's planar pose from its speed and yaw rate."""
+
+    def __init__(self) -> None:
+        self.pose = (0.0, 0.0, 0.0)
+        self.t_s: float | None = None
+
+    def update(self, t_s: float, speed_mps: float, yaw_rate_radps: float) -> tuple[float, float, float]:
+        if self.t_s is not None and t_s > self.t_s:
+            dt = t_s - self.t_s
+            x, y, psi = self.pose
+            mid = psi + 0.5 * yaw_rate_radps * dt
+            self.pose = (
+                x + speed_mps * dt * math.cos(mid),
+                y + speed_mps * dt * math.sin(mid),
+                psi + yaw_rate_radps * dt,
+            )
+        self.t_s = t_s
+        return self.pose
 
 
 class PathPrediction:

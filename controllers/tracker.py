@@ -19,33 +19,35 @@ Per job and view:
    ground under a region shows (the road below it lies outside the fence: it closes
    faster than the ego drives, an oncoming car), that ground's depth is used when it is
    the larger: the static depth would put such a car nearer and so nearer the path.
-3. **Ground motion**: each region's inner edge (the column nearest the image centre: a
-   region at the image's border is cut there, its outer edge and centre move with the
-   cut) at Z_k, moved into one odometry frame by dead reckoning from the ego's speed and
-   yaw rate, gives the target's velocity over the ground by a least-squares line over
-   the last ``window`` jobs. A region across the centre is in the corridor now: the
-   corridor rule of ``controllers.geofence`` judges it.
+3. **Ground motion**: each region's inner edge (the column nearest the image centre) at
+   Z_k, moved into one odometry frame by dead reckoning from the ego's speed and yaw
+   rate, gives the target's velocity over the ground by a least-squares line over the
+   last ``window`` jobs. A region across the centre is in the corridor now: the corridor
+   rule of ``controllers.geofence`` judges it. A region cut by the image's side (its
+   outer edge and centre move with the cut) predicts nothing, unless ``cut_regions`` or
+   ``extent``.
 4. **Predict**: the ego keeps its speed and yaw rate; the target keeps its velocity.
    Sampled every ``step_s`` up to the track's TTC plus ``horizon_pad_s``: does the
-   target (``target_half_length_m`` along the ego; across it, from its inner edge
-   outwards by its region's width at its depth, or without end where the image's side
-   cuts the region: ``extent``) overlap the ego's footprint widened by ``margin_m`` each
-   side? A crossing car whose front has passed the path's centre still blocks it with
-   its body. Only a track whose inner edge's bearing (the ego's rotation taken out)
-   comes in, or moves out no faster than an edge that meets the camera plane inside the
-   corridor, predicts: beside the path a standing object's bearing moves out faster
-   than that as the ego approaches, at any depth, so no error of the depth (the fences'
-   TTC bounds are coarse) can bring it in. Tracks with fewer than ``min_hits`` regions,
-   a ground speed above ``max_speed_mps`` (a bad association) or below
-   ``min_speed_mps`` (standing: the corridor rule judges it; a turning ego's arc, held
-   beyond the turn, would sweep the kerbs and houses on its inside) predict nothing.
+   target (its inner edge, ``target_half_length_m`` along the ego; with ``extent``, also
+   from its inner edge outwards by its region's width at its depth, or without end where
+   the image's side cuts it: a crossing car whose front has passed the path's centre
+   still blocks it with its body) overlap the ego's footprint widened by ``margin_m``
+   each side? Only a track whose inner edge's bearing (the ego's rotation taken out)
+   comes in or holds predicts (with ``corridor_allowance``, also one that moves out no
+   faster than an edge that meets the camera plane inside the corridor): beside the
+   path a standing object's bearing moves out as the ego approaches, at any depth, so no
+   error of the depth (the fences' TTC bounds are coarse) can bring it in. Tracks with
+   fewer than ``min_hits`` regions, a ground speed above ``max_speed_mps`` (a bad
+   association) or below ``min_speed_mps`` (standing: the corridor rule judges it; a
+   turning ego's arc, held beyond the turn, would sweep the kerbs and houses on its
+   inside) predict nothing.
 
 The regions, and the fovea's check of the wide view's bearing test:
 ``controllers.path_prediction``.
 
-Odometry: x [m] forward and y [m] left of the ego's footprint centre at the run's
-start, heading psi [rad]. Camera frame to ego frame: forward = Z + mount_forward_m,
-left = -X.
+Odometry (``controllers.path_prediction.Odometry``): x [m] forward and y [m] left of the
+ego's footprint centre at the run's start, heading psi [rad]. Camera frame to ego frame:
+forward = Z + mount_forward_m, left = -X.
 """
 
 from __future__ import annotations
@@ -78,16 +80,22 @@ class TrackerConfig:
     max_speed_mps: float = 15.0  # [m/s] a faster fitted ground speed is a bad association
     min_speed_mps: float = 0.8  # [m/s] a slower target is standing: the corridor rule judges it
     all_fences: bool = True  # regions of every fence where it is judged, not only the largest's
-    extent: bool = True  # a target spans its region's width (unbounded past a cut image side)
+    # The three levers below are off by default: each avoids more road users and raises the
+    # false alarms over the scenery seeds (docs/vru.md, "Levers").
+    # a target spans its region's width (unbounded past a cut image side); off: its inner edge
+    extent: bool = False
+    # a region cut by the image's side predicts by its inner edge (its outer edge moves with
+    # the cut); off: it predicts nothing
+    cut_regions: bool = False
+    # the bearing test lets an inner edge move out as fast as one that meets the camera plane
+    # inside the corridor; off: it must come in or hold
+    corridor_allowance: bool = False
     # [m] a region spans at least this height at the static depth of its fence: the road's
     # own fence, running past a fence's counted rows, leaves strips a few rows tall
     min_height_m: float = 0.5
     # [px per row] a region whose inner edge slants outwards faster, row by row down, lies on
     # the ground: a strip of verge or road that the network fenced along a fence's boundary
     max_slant_px_per_row: float = 0.5
-    # the bearing test lets an inner edge move out as fast as one that meets the camera plane
-    # inside the corridor (False: it must come in or hold)
-    corridor_allowance: bool = True
     # views whose tracks check the bearing test of the predicting views' tracks at the same
     # bearing (within check_tol_px of the predicting view): the fovea sees it 4x finer
     check_views: tuple[str, ...] = ("fovea",)
@@ -148,27 +156,6 @@ class Track:
         return min(o.t_s + o.tau_bound_s for o in self.obs)
 
 
-class Odometry:
-    """Dead reckoning of the ego's planar pose from its speed and yaw rate."""
-
-    def __init__(self) -> None:
-        self.pose = (0.0, 0.0, 0.0)
-        self.t_s: float | None = None
-
-    def update(self, t_s: float, speed_mps: float, yaw_rate_radps: float) -> tuple[float, float, float]:
-        if self.t_s is not None and t_s > self.t_s:
-            dt = t_s - self.t_s
-            x, y, psi = self.pose
-            mid = psi + 0.5 * yaw_rate_radps * dt
-            self.pose = (
-                x + speed_mps * dt * math.cos(mid),
-                y + speed_mps * dt * math.sin(mid),
-                psi + yaw_rate_radps * dt,
-            )
-        self.t_s = t_s
-        return self.pose
-
-
 class BlobTracker:
     """The tracks of one view (see the module docstring)."""
 
@@ -214,7 +201,7 @@ class BlobTracker:
         ts, pts = [], []
         for o in tr.obs:
             cut = o.u_left <= 0 or o.u_right >= cal.width_px - 1
-            if o.u_left <= cal.cx_px <= o.u_right or (cut and not c.extent):
+            if o.u_left <= cal.cx_px <= o.u_right or (cut and not (c.cut_regions or c.extent)):
                 return None
             z = max(o.speed_mps * cos_p * max(t0 - o.t_s, c.min_ttc_s), o.contact_depth_m or 0.0, 0.5)
             fwd, left = z + cal.mount_forward_m, -o.inner_bearing(cal) * z

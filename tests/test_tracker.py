@@ -6,8 +6,9 @@ import pytest
 
 from controllers.base import Calibration
 from controllers.evidence import Blob, ground_ttc_map
+from controllers.path_prediction import Odometry
 from controllers.road import ground_ttc_per_row
-from controllers.tracker import BlobTracker, Odometry, TrackerConfig
+from controllers.tracker import BlobTracker, TrackerConfig
 from sim.camera import CameraConfig
 from sim.vehicles import EGO_SIZE_M
 
@@ -26,11 +27,11 @@ def _blob(cal, x_left_m, x_right_m, depth_m, tau_s):
     return Blob(mask, max(u[0], 0.0), min(u[1], cal.width_px - 1.0), bound)
 
 
-def _run(lateral_m, lateral_speed_mps, width_m=0.5, depth0_m=30.0, jobs=12, cfg=TrackerConfig()):
+def _run(lateral_m, lateral_speed_mps, width_m=0.5, depth0_m=30.0, jobs=12, cfg=None):
     """In-path predictions of a target whose left edge is at ``lateral_m`` (camera x, + right)
     moving at ``lateral_speed_mps`` across a straight ego's path, job by job."""
     cal = _cal()
-    tracker, odo = BlobTracker(cfg, cal), Odometry()
+    tracker, odo = BlobTracker(cfg or TrackerConfig(), cal), Odometry()
     out = []
     for k in range(jobs):
         t = 0.1 * k
@@ -66,19 +67,29 @@ def test_a_pedestrian_that_clears_before_the_ego_arrives_is_not():
 def test_a_crossing_car_whose_front_has_passed_is_in_path_by_its_body():
     # a 4.5 m car from 16 m right at 8 m/s: at the ego's arrival (2.7 s) its front is 5.6 m
     # left of the path's centre and its body still across the path
-    assert any(_run(16.0, -8.0, width_m=4.5, jobs=20))
+    assert any(_run(16.0, -8.0, width_m=4.5, jobs=20, cfg=TrackerConfig(extent=True)))
     # its front edge alone, a point, has crossed the path before the ego arrives
-    assert not any(_run(16.0, -8.0, width_m=4.5, jobs=20, cfg=TrackerConfig(extent=False)))
+    assert not any(_run(16.0, -8.0, width_m=4.5, jobs=20))
 
 
 def test_a_region_cut_by_the_image_side_is_judged_by_its_inner_edge():
-    # a long target whose right part lies beyond the image's side, front coming in: it
-    # reaches the path with the rest of it still outside the view
-    pred = _run(6.0, -2.2, width_m=40.0)
-    assert any(pred)
-    assert not any(_run(6.0, -2.2, width_m=40.0, cfg=TrackerConfig(extent=False)))
+    # a long target whose right part lies beyond the image's side, front coming in: its
+    # outer edge moves with the cut, its inner edge shows where it goes
+    assert any(_run(6.0, -2.6, width_m=40.0, cfg=TrackerConfig(cut_regions=True)))
+    assert any(_run(6.0, -2.6, width_m=40.0, cfg=TrackerConfig(extent=True)))
+    assert not any(_run(6.0, -2.6, width_m=40.0))  # by default a cut region predicts nothing
     # the same region moving out never is
-    assert not any(_run(6.0, 1.0, width_m=40.0))
+    assert not any(_run(6.0, 1.0, width_m=40.0, cfg=TrackerConfig(cut_regions=True)))
+    assert not any(_run(6.0, 1.0, width_m=40.0, cfg=TrackerConfig(extent=True)))
+
+
+def test_the_corridor_allowance_lets_in_an_edge_that_lands_inside_the_corridor():
+    # from 3 m right at 1 m/s: at the ego's arrival its left edge is 0.3 m right of the
+    # path's centre, so its bearing moves out, slowly, all the way in
+    assert any(_run(3.0, -1.0, cfg=TrackerConfig(corridor_allowance=True)))
+    assert not any(_run(3.0, -1.0))
+    # a standing target beside the path moves out faster than the allowance
+    assert not any(_run(2.0, 0.0, cfg=TrackerConfig(corridor_allowance=True)))
 
 
 def test_ground_ttc_map_is_the_straight_road_rule_without_yaw():
