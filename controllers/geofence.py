@@ -242,8 +242,9 @@ class GeofenceController(Controller):
             est_ms += (time.perf_counter() - t0) * 1e3
             turned = turn_rad * self._cals[v].fx_px > c.max_rotation_px  # too far for this view
             jobs[v] = (maps, None if turned else self._bands(v, self._thr[idx], s, yaw))
-            if not turned:  # every view's regions first: the fovea checks the wide view's
-                self._paths.observe(v, maps, self._thr[idx], jobs[v][1], s, obs.t_s)
+            # every view's regions first: the fovea checks the wide view's; a view that turned
+            # too far gives none, and its tracks age by a job
+            self._paths.observe(v, maps, self._thr[idx], jobs[v][1], s, obs.t_s)
         for v, idx in self._fences.items():
             thr = self._thr[idx]
             maps, bands = jobs[v]

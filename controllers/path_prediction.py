@@ -13,8 +13,9 @@ a strip of verge that the network fenced along a fence's boundary.
 
 The check (``TrackerConfig.check_views``): the wide view predicts, and the fovea, which
 sees the same bearings four times finer, checks its bearing test. A wide track predicted
-into the path is dropped when a fovea track whose inner edge lies at the same bearing
-(within ``check_tol_px`` of the wide view) has enough regions and fails the bearing test:
+into the path is dropped for good when the fovea track whose inner edge lies nearest its
+bearing (within ``check_tol_px`` of the wide view; one with enough regions, none of them
+across the fovea's centre) fails the bearing test:
 a fence's edge in the wide view can stand still for half a second on a parked truck's far
 corner while its true bearing moves out by three pixels.
 """
@@ -73,8 +74,13 @@ class PathPrediction:
 
     def observe(self, view: str, maps: np.ndarray, thr: np.ndarray, bands: list, speed_mps: float, t_s: float):
         """Extract the regions of ``view`` (sorted (K, H, W) maps of fences ``thr`` [s],
-        ``bands``: each fence's counted pixels) and associate them with its tracks."""
-        if view not in self.views or not bands[-1].any():
+        ``bands``: each fence's counted pixels, None where the view's pair turned too far)
+        and associate them with its tracks."""
+        if view not in self.views:
+            return
+        if bands is None or not any(b.any() for b in bands):  # nothing to judge: the tracks age
+            self.trackers[view].update(t_s, self.pose, speed_mps, [])
+            self._seen[view] = []
             return
         c, t, cal = self.cfg, self.cfg.tracker, self.cals[view]
         need = need_px(cal, static_depth_m(cal, speed_mps, thr[-1]), c.min_region_px, c.min_face_m2)
@@ -118,10 +124,16 @@ class PathPrediction:
         for v in t.check_views:
             if v == view or v not in self._seen:
                 continue
-            checker = self.trackers[v]
-            for _, other in self._seen[v]:
-                if len(other.obs) < t.min_hits or abs(other.obs[-1].inner_bearing(self.cals[v]) - bearing) > tol:
-                    continue
+            checker, cx = self.trackers[v], self.cals[v].cx_px
+            near = [
+                (abs(other.obs[-1].inner_bearing(self.cals[v]) - bearing), other)
+                for _, other in self._seen[v]
+                # its inner edge on one side throughout: across the centre it has none
+                if len(other.obs) >= t.min_hits and not any(o.u_left <= cx <= o.u_right for o in other.obs)
+            ]
+            near = [(d, other) for d, other in near if d <= tol]
+            if near:  # the nearest in bearing
+                other = min(near, key=lambda x: x[0])[1]
                 if not checker.closing_in(other, other.contact_time_s()):
                     track.refuted = True
                     return True

@@ -7,8 +7,9 @@ import numpy as np
 import pytest
 
 from controllers.base import Observation
-from controllers.evidence import inner_edge_slant
+from controllers.evidence import counted_pixels, ground_ttc_map, inner_edge_slant
 from controllers.geofence import GeofenceConfig, GeofenceController
+from controllers.path_prediction import PathPrediction
 from controllers.road import ground_ttc_per_row
 from controllers.tracker import TrackerConfig
 from sim.camera import cam_T_ego
@@ -108,3 +109,21 @@ def test_inner_edge_slant_tells_an_upright_edge_from_a_strip_of_ground():
         ground[r, 0 : 60 - 2 * (r - 10)] = True
     assert inner_edge_slant(ground, left_of_centre=True) == pytest.approx(2.0)
     assert inner_edge_slant(ground[:, ::-1], left_of_centre=False) == pytest.approx(2.0)
+
+
+def test_a_view_that_turned_too_far_ages_its_tracks():
+    """A job whose pair turned too far gives no regions; the view's tracks miss it, and
+    end after ``max_missed`` such jobs instead of waiting out the turn."""
+    cfg = _cfg()
+    paths = PathPrediction(cfg, {"wide": CAL})
+    thr = np.asarray(THR)
+    tau = add_box(road(), 20.0, -3.0, 20.0 / SPEED)
+    maps = np.stack([(tau > 0) & (tau <= t) for t in thr]).astype(np.float32)
+    bands = [counted_pixels(ground_ttc_map(CAL, SPEED), t, cfg.ground_margin) for t in thr]
+    paths.start_job(0.0, SPEED, 0.0)
+    paths.observe("wide", maps, thr, bands, SPEED, 0.0)
+    assert len(paths.trackers["wide"].tracks) == 1
+    for k in range(1, cfg.tracker.max_missed + 2):
+        paths.start_job(0.1 * k, SPEED, 0.0)
+        paths.observe("wide", maps, thr, None, SPEED, 0.1 * k)
+    assert paths.trackers["wide"].tracks == []
