@@ -64,12 +64,16 @@ class PathPrediction:
         self.trackers = {v: BlobTracker(t, cals[v]) for v in self.views}
         self.ground_depth = {v: ground_depth_per_row(cals[v]) for v in self.views}
         self.odometry = Odometry()
-        self.pose = (0.0, 0.0, 0.0)
         self._seen: dict[str, list[tuple[Blob, Track]]] = {}
+
+    @property
+    def pose(self) -> tuple[float, float, float]:
+        """The ego's odometry pose (x [m], y [m], psi [rad]) at this job."""
+        return self.odometry.pose
 
     def start_job(self, t_s: float, speed_mps: float, yaw_rate_radps: float) -> None:
         """Dead-reckon the ego's pose to this job; forget the last job's regions."""
-        self.pose = self.odometry.update(t_s, speed_mps, yaw_rate_radps)
+        self.odometry.update(t_s, speed_mps, yaw_rate_radps)
         self._seen = {}
 
     def observe(self, view: str, maps: np.ndarray, thr: np.ndarray, bands: list, speed_mps: float, t_s: float):
@@ -124,17 +128,17 @@ class PathPrediction:
         for v in t.check_views:
             if v == view or v not in self._seen:
                 continue
-            checker, cx = self.trackers[v], self.cals[v].cx_px
+            cx = self.cals[v].cx_px
             near = [
-                (abs(other.obs[-1].inner_bearing(self.cals[v]) - bearing), other)
+                (d, other)
                 for _, other in self._seen[v]
                 # its inner edge on one side throughout: across the centre it has none
                 if len(other.obs) >= t.min_hits and not any(o.u_left <= cx <= o.u_right for o in other.obs)
+                if (d := abs(other.obs[-1].inner_bearing(self.cals[v]) - bearing)) <= tol
             ]
-            near = [(d, other) for d, other in near if d <= tol]
             if near:  # the nearest in bearing
                 other = min(near, key=lambda x: x[0])[1]
-                if not checker.closing_in(other, other.contact_time_s()):
+                if not self.trackers[v].closing_in(other, other.contact_time_s()):
                     track.refuted = True
                     return True
         return False

@@ -281,6 +281,6 @@ class BlobTracker:
         # the target spans from its inner edge outwards, away from the image centre, by its
         # extent (ego frame: left of the centre is + left)
         outwards = 1.0 if tr.obs[-1].u_right < cal.cx_px else -1.0
-        far = left + outwards * extent_m if math.isfinite(extent_m) else np.full_like(left, outwards * np.inf)
+        far = left + outwards * extent_m  # +-inf where the image's side cuts it
         lo, hi = np.minimum(left, far), np.maximum(left, far)
         return bool(np.any((np.abs(fwd) <= reach_l) & (lo <= reach_w) & (hi >= -reach_w)))
