@@ -126,10 +126,19 @@ class Observation:
     fovea_latest: np.ndarray | None = None  # (H, W, 3) uint8 RGB through the fovea; None without one
     fovea_prev: np.ndarray | None = None
     ego_yaw_rate_radps: float = 0.0  # [rad/s] + turning left, from the car's yaw-rate sensor at the capture
+    # [rad] + left: the ego's heading change from the earlier capture of the pair to the latest,
+    # its yaw-rate sensor integrated; None where unknown (then yaw rate x dt_s)
+    pair_yaw_rad: float | None = None
 
     def pair(self, view: str) -> tuple[np.ndarray | None, np.ndarray | None]:
         """(prev, latest) images of view 'wide' or 'fovea'."""
         return (self.image_prev, self.image_latest) if view == "wide" else (self.fovea_prev, self.fovea_latest)
+
+    @property
+    def pair_rotation_rad(self) -> float:
+        """[rad] + left: the ego's heading change over the pair (``pair_yaw_rad``, else the
+        yaw rate at the capture times the pair's interval)."""
+        return float(self.pair_yaw_rad) if self.pair_yaw_rad is not None else float(self.ego_yaw_rate_radps) * self.dt_s
 
 
 @dataclass(frozen=True)

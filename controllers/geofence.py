@@ -38,14 +38,17 @@ estimator's map p_i = p(0 < tau <= tau_i)):
    area that ``min_face_m2`` of face covers at the fence's depth Z_i,
    fx fy A / Z_i^2 (a 1.7 x 1.5 m target at 53 m covers about 6 x 5 px; 0.3 m^2 at
    18 m is 30 px: a far target that the network puts into a near fence is too small
-   for it). With ``min_height_m`` it must also span that height at Z_i, fy h / Z_i rows:
-   the road's own fence, running a little past the counted rows' boundary, leaves strips
-   one to five rows tall along the lowest counted row (off by default: docs/sensor.md).
+   for it). In the views of ``min_height_views`` (the fovea) it must also span
+   ``min_height_m`` at Z_i, fy h / Z_i rows: the road's own fence, running a little past the
+   counted rows' boundary, leaves strips one to five rows tall along the lowest counted row.
    Rows count only when the ground one row below them is
    outside the fence too (near the horizon one row spans tens of metres).
    A view whose pair turned by more than ``max_rotation_px`` (the fastest yaw rate within
-   the pair x its interval x focal length: the fovea in a junction turn) gives no evidence in that job: its flow
-   leaves the estimator's range.
+   the pair x its interval x focal length: a junction turn) moves beyond the flow the
+   estimator reads. With ``derotate`` its earlier frame is first warped by the ego's
+   rotation over the pair (``controllers.derotate``), and only the tracker's predicted
+   regions count in that job: crossing traffic, which closes faster than the ego, lies off
+   the bent corridor at a fence's static depth. Without it the view gives no evidence then.
 5. **Nested** (``nested``): what lies inside tau_i lies inside every larger fence too,
    so a fence's region counts only when some larger fence has one in the same job (the
    largest fence stands alone). A far vehicle that the network reads into a middle
@@ -99,6 +102,7 @@ import time
 import numpy as np
 
 from controllers.base import BrakeCommand, Calibration, Controller, GeofenceView, Observation
+from controllers.derotate import derotate
 from controllers.evidence import corridor_mask, counted_pixels, ground_ttc_map, need_px, standing_regions
 from controllers.geofence_config import (  # noqa: F401  (re-exported: the controller's settings)
     DEFAULT_FOVEA_FENCES_FROM_S,
@@ -179,11 +183,20 @@ class GeofenceController(Controller):
         return [counted_pixels(tau_ground, tau, self.cfg.ground_margin) for tau in thr]
 
     def _evidence(
-        self, maps: np.ndarray, thr: np.ndarray, bands, view: str, speed_mps: float, yaw_rate: float, t_s: float
+        self,
+        maps: np.ndarray,
+        thr: np.ndarray,
+        bands,
+        view: str,
+        speed_mps: float,
+        yaw_rate: float,
+        t_s: float,
+        static: bool = True,
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
         """Sorted (K, H, W) maps of fences ``thr`` [s] in ``view`` and their counted pixels
         ``bands`` -> (in-path region size per fence [px], counted mask, corridor mask,
-        regions predicted into the path)."""
+        regions predicted into the path). Without ``static`` only the tracker's predicted
+        regions count, not the corridor at the fence's static depth."""
         c, cal = self.cfg, self._cals[view]
         curvature = yaw_rate / speed_mps if speed_mps > c.min_speed_mps else 0.0
         half_w = cal.ego_width_m / 2 + c.corridor_margin_m
@@ -198,8 +211,9 @@ class GeofenceController(Controller):
             region = corridor_mask(cal, bands[i], half_w, depth, curvature)
             lowest = int(np.flatnonzero(bands[i].any(axis=1)).max())
             inside = maps[i] > c.prob_inside
-            rows = cal.fy_px * c.min_height_m / depth if depth > 1e-6 else 0.0
-            area, standing = standing_regions(inside & region, lowest, c.contact_px, rows)
+            tall = c.min_height_m if view in c.min_height_views else 0.0
+            rows = cal.fy_px * tall / depth if depth > 1e-6 else 0.0
+            area, standing = standing_regions(inside & region & static, lowest, c.contact_px, rows)
             need = need_px(cal, depth, c.min_region_px, c.min_face_m2)
             area_p, ahead = standing_regions(predicted & inside & bands[i], lowest, c.contact_px, rows)
             if area_p > area:
@@ -232,28 +246,34 @@ class GeofenceController(Controller):
         tel: dict = {}
         views: dict[str, GeofenceView] = {}
         fired_at: dict[str, float] = {}  # view -> smallest fired threshold [s]
-        jobs = {}  # view -> (maps, counted pixels per fence, or None where the pair turned too far)
+        jobs = {}  # view -> (maps, counted pixels per fence or None, whether the corridor rule holds)
         for v, idx in self._fences.items():
             prev, latest = obs.pair(v)
             if latest is None or prev is None:
                 raise ValueError(f"controller {self.name!r}: the observation has no {v} pair")
             t0 = time.perf_counter()
+            turned = turn_rad * self._cals[v].fx_px > c.max_rotation_px
+            if turned and c.derotate:  # the network sees the translation alone, and so does the ground
+                prev = derotate(prev, latest, self._cals[v], obs.pair_rotation_rad)
             maps = self._estimators[v].geofence(prev, latest, self._thr_est[idx])
             est_ms += (time.perf_counter() - t0) * 1e3
-            turned = turn_rad * self._cals[v].fx_px > c.max_rotation_px  # too far for this view
-            jobs[v] = (maps, None if turned else self._bands(v, self._thr[idx], s, yaw))
+            if not turned:
+                bands = self._bands(v, self._thr[idx], s, yaw)
+            else:
+                bands = self._bands(v, self._thr[idx], s, 0.0) if c.derotate else None
+            jobs[v] = (maps, bands, not turned)
             # every view's regions first: the fovea checks the wide view's; a view that turned
-            # too far gives none, and its tracks age by a job
-            self._paths.observe(v, maps, self._thr[idx], jobs[v][1], s, obs.t_s)
+            # too far without derotation gives none, and its tracks age by a job
+            self._paths.observe(v, maps, self._thr[idx], bands, s, obs.t_s)
         for v, idx in self._fences.items():
             thr = self._thr[idx]
-            maps, bands = jobs[v]
+            maps, bands, static = jobs[v]
             if bands is None:
                 self._streak[v][:] = 0
                 empty = np.zeros(maps.shape[1:], dtype=bool)
                 sizes, counted, corridor, n_pred = np.zeros(len(thr), dtype=np.int64), empty, empty, 0
             else:
-                sizes, counted, corridor, n_pred = self._evidence(maps, thr, bands, v, s, yaw, obs.t_s)
+                sizes, counted, corridor, n_pred = self._evidence(maps, thr, bands, v, s, yaw, obs.t_s, static)
             tel[f"predicted_{v}"] = n_pred
             fired = self._fired(v, sizes)
             if fired.any():

@@ -72,9 +72,11 @@ class GeofenceConfig:
     corridor_margin_m: float = 0.25  # [m] beyond the ego's half width, each side
     min_region_px: int = 8  # [px] smallest connected in-path region
     min_face_m2: float = 0.3  # [m^2] smallest face an obstacle shows at the fence's depth
-    # [m] smallest height an in-path region spans at the fence's depth (0: off; 0.3 drops the
-    # road's own fence edge, a strip a few rows tall, but lost CBLA-25-50: docs/sensor.md)
-    min_height_m: float = 0.0
+    # [m] smallest height an in-path region spans at the fence's depth, in ``min_height_views``
+    # (0: off). The road's own fence edge leaves strips one to five rows tall; 0.3 m at a fence's
+    # depth is 4-8 rows in the fovea, one or two in the wide view (there it cost CBLA-25-50)
+    min_height_m: float = 0.3
+    min_height_views: tuple[str, ...] = ("fovea",)
     contact_px: int = 2  # [px] a region's bottom lies at most this far above the lowest counted row
     nested: bool = True  # a fence's evidence counts only with evidence in a larger fence too
     persistence_frames: int = 2  # [jobs] consecutive jobs before a fence fires
@@ -83,8 +85,12 @@ class GeofenceConfig:
     frame_stride: int = DEFAULT_FRAME_STRIDE  # [frames] the pair is (k - stride, k): 3x the motion per pair
     fovea_fences_from_s: float = DEFAULT_FOVEA_FENCES_FROM_S  # [s] with a fovea: fences below run on the wide view only
     tracker: TrackerConfig = field(default_factory=TrackerConfig)  # fenced regions followed over jobs
-    # [px] a view whose pair turned further than this (yaw rate x pair interval x focal length)
-    # gives no evidence in that job: its flow leaves the estimator's range (a turn: 8 deg in 0.3 s)
+    # warp each pair's earlier frame by the ego's rotation over the pair before the estimator
+    # (controllers.derotate): in a junction turn the network then sees the translation alone
+    derotate: bool = True
+    # [px] without ``derotate``: a view whose pair turned further than this (yaw rate x pair
+    # interval x focal length) gives no evidence in that job: its flow leaves the estimator's
+    # range (a turn: 8 deg in 0.3 s)
     max_rotation_px: float = 12.0
 
     def __post_init__(self) -> None:
@@ -97,6 +103,7 @@ class GeofenceConfig:
             "contact_px": self.contact_px >= 0,
             "min_face_m2": self.min_face_m2 >= 0,
             "min_height_m": self.min_height_m >= 0,
+            "min_height_views": all(v in ("wide", "fovea") for v in self.min_height_views),
             "persistence_frames": self.persistence_frames >= 1,
             "release_frames": self.release_frames >= 1,
             "min_speed_mps": self.min_speed_mps >= 0,

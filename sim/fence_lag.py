@@ -19,7 +19,10 @@ only once the actor is that much closer than the threshold, < 0 when it fires ea
 
 The critical actor is the in-path actor ahead with the smallest bumper-to-bumper TTC at
 the job's capture; an actor with fewer than ``MIN_PIXELS`` visible pixels in a view is
-not measured in that view in that job.
+not measured in that view in that job. The first job that measures it in any view gives
+the TTC at which the camera first saw it (``first_seen_ttc_s``, bumper to bumper like the
+warning's): a crossing car on a collision course stays at a constant bearing, which may lie
+outside the camera's field of view until the last second.
 """
 
 from __future__ import annotations
@@ -39,6 +42,8 @@ class FenceLagMeter:
         self.cover_ttc_s: dict[str, dict[float, float]] = {}  # view -> threshold [s] -> tau* at first cover [s]
         # (tau* [s], '<tau_i>' -> share inside in the view that covers most) per measured job
         self.history: list[tuple[float, dict[str, float]]] = []
+        # [s] the critical actor's bumper-to-bumper TTC at the first job that saw it in any view
+        self.first_seen_ttc_s: float | None = None
 
     def update(self, views: dict, gts: dict, critical) -> dict[str, dict[str, float]]:
         """``views``: view name -> ``controllers.base.GeofenceView``; ``gts``: view name -> the
@@ -54,6 +59,8 @@ class FenceLagMeter:
             pix = (gt.instance == critical.instance) & gt.valid & np.isfinite(gt.tau_s) & (gt.tau_s > 0)
             if int(pix.sum()) < MIN_PIXELS:
                 continue
+            if self.first_seen_ttc_s is None:
+                self.first_seen_ttc_s = float(critical.ttc_s)
             tau_v = float(np.median(gt.tau_s[pix]))
             tau_star = tau_v if tau_star is None else tau_star
             shares = {}

@@ -74,6 +74,7 @@ class FrameRecord:
     work: JobWork | None = None  # what its job computed (what a profile charges)
     fence_cover: dict = field(default_factory=dict)  # view -> threshold '<s>' -> share of the critical actor inside
     ego_yaw_rate_radps: float = 0.0  # [rad/s] + left, as the car's yaw-rate sensor reads it
+    ego_heading_rad: float = 0.0  # [rad] + left, as the car integrates its yaw-rate sensor
 
 
 class ClosedLoop:
@@ -157,7 +158,13 @@ class ClosedLoop:
             fovea[0].rgb if fovea[0] is not None else None,
             fovea[1].rgb if fovea[1] is not None else None,
             rec.ego_yaw_rate_radps,
+            self._pair_yaw_rad(job.frame) if prev is not None else None,
         )
+
+    def _pair_yaw_rad(self, frame: int) -> float:
+        """[rad] + left: the ego's heading change from frame ``frame - stride`` to ``frame``."""
+        turn = self.records[frame].ego_heading_rad - self.records[frame - self.stride].ego_heading_rad
+        return math.remainder(turn, math.tau)
 
     def truth_at(self, job: Job) -> StepTruth:
         """Ground truth at the job's capture (for oracles, ``info`` and traces only)."""
@@ -278,6 +285,7 @@ class ClosedLoop:
             self.truth,
             self.queue.active,
             ego_yaw_rate_radps=float(sim.ego.yaw_rate_radps),
+            ego_heading_rad=sim.ego.heading_rad,
         )
         self.records.append(rec)
         self._frames[rec.index] = frame

@@ -53,8 +53,16 @@ SUMMARY_KEYS = (
 )
 #: per threshold [s]: the critical actor's exact camera-plane TTC when the fence first covered half of it,
 #: the fence's lag (threshold minus that TTC; the earlier cover of the views), the lag in each view, and
-#: the persistent lag (from the first frame the fence holds to the end); see sim.fence_lag
-LAG_KEYS = ("fence_cover_ttc_s", "fence_lag_s", "fence_lag_wide_s", "fence_lag_fovea_s", "fence_lag_persistent_s")
+#: the persistent lag (from the first frame the fence holds to the end); and the critical actor's
+#: bumper-to-bumper TTC when the camera first saw it; see sim.fence_lag
+LAG_KEYS = (
+    "fence_cover_ttc_s",
+    "fence_lag_s",
+    "fence_lag_wide_s",
+    "fence_lag_fovea_s",
+    "fence_lag_persistent_s",
+    "ttc_at_first_seen_s",
+)
 
 
 def _r(x: float | None, nd: int = 4) -> float | None:
@@ -117,4 +125,5 @@ def summarize(
         summary["fence_lag_wide_s"] = lag.lag_s("wide")
         summary["fence_lag_fovea_s"] = lag.lag_s("fovea") if sim.camera.fovea_zoom is not None else None
         summary["fence_lag_persistent_s"] = lag.persistent_lag_s()
+        summary["ttc_at_first_seen_s"] = _r(lag.first_seen_ttc_s)
     return summary

@@ -22,6 +22,7 @@ TABLE_COLUMNS = (
     ("collision", 9),
     ("impact_speed_kph", 8),
     ("min_gap_m", 8),
+    ("ttc_at_first_seen_s", 8),
     ("ttc_at_first_warning_s", 8),
     ("ttc_at_first_brake_s", 8),
     ("false_alarm", 5),
@@ -32,6 +33,7 @@ TABLE_COLUMNS = (
 HEADERS = {
     "impact_speed_kph": "impact",
     "min_gap_m": "gap_m",
+    "ttc_at_first_seen_s": "ttc_seen",
     "ttc_at_first_warning_s": "ttc_warn",
     "ttc_at_first_brake_s": "ttc_brk",
     "false_alarm": "FA",
@@ -90,7 +92,7 @@ def _csv_value(v):
 
 
 def write_table(out_dir: Path, summaries: list[dict]) -> None:
-    keys = list(SUMMARY_KEYS) + [k for k in ("fence_lag_s",) if any(k in s for s in summaries)]
+    keys = list(SUMMARY_KEYS) + [k for k in ("fence_lag_s", "ttc_at_first_seen_s") if any(k in s for s in summaries)]
     buf = io.StringIO()
     w = csv.DictWriter(buf, fieldnames=keys, lineterminator="\n")
     w.writeheader()
@@ -122,7 +124,8 @@ def format_table(summaries: list[dict], markdown: bool = False) -> str:
             return f"{v:.2f}"
         return str(v)
 
-    cols = [(k, n) for k, n in TABLE_COLUMNS if k != "lag" or any(s.get("fence_lag_s") for s in summaries)]
+    measured = {"lag": "fence_lag_s", "ttc_at_first_seen_s": "ttc_at_first_seen_s"}  # camera controllers only
+    cols = [(k, n) for k, n in TABLE_COLUMNS if k not in measured or any(s.get(measured[k]) for s in summaries)]
     threats = [s for s in summaries if s["threat"]]
     benign = [s for s in summaries if not s["threat"]]
     avoided = sum(not s["collision"] for s in threats)

@@ -31,6 +31,8 @@ def test_camera_fed_run_with_fixed_latency_is_byte_identical(tmp_path):
     s = json.loads(outs[0][1])
     assert s["latency_mode"] == "fixed:150" and s["latency_ms_mean"] == 150.0 and s["frames_skipped"] > 0
     assert s["num_alphas"] == 2 and s["thresholds_s"] == [1.0, 2.0] and set(s["fence_lag_s"]) == {"1", "2"}
+    # the car ahead is in view from the first job: seen at the TTC of the first pair, before any warning
+    assert s["ttc_at_first_seen_s"] > max(s["ttc_at_first_warning_s"] or 0.0, 3.0)
     header = outs[0][0].decode().splitlines()[0].split(",")
     for col in ("frame", "latency_ms", "wait_ms", "inpath_px_1s", "fence_fired_s", "crit_inside_2s"):
         assert col in header
