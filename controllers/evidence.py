@@ -18,7 +18,7 @@ import cv2
 import numpy as np
 
 from controllers.base import Calibration
-from controllers.road import corridor_columns, ground_depth_per_row, ground_ttc_per_row
+from controllers.road import corridor_columns, ground_depth_per_row, ground_ttc_per_row, static_depth_m
 
 
 def standing_regions(
@@ -154,3 +154,47 @@ def fenced_blobs(
         z = contact_depth(maps[i_min] > prob_inside, m, u0, u1, ground_depth)
         out.append(Blob(m, float(u0), float(u1), float(thr[i_min]), z))
     return out
+
+
+def in_path_evidence(
+    maps: np.ndarray,
+    thr: np.ndarray,
+    bands: list[np.ndarray],
+    cal: Calibration,
+    cfg,
+    speed_mps: float,
+    yaw_rate_radps: float,
+    predicted: np.ndarray,
+    min_height_m: float = 0.0,
+    static: bool = True,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Rules 2-4 of ``controllers.geofence`` in one view: sorted (K, H, W) maps of fences
+    ``thr`` [s], their counted pixels ``bands``, the tracker's ``predicted`` (H, W) regions
+    and the ``controllers.geofence_config.GeofenceConfig`` ``cfg`` -> (in-path region size
+    per fence [px], counted mask, corridor mask). A region counts in the corridor at the
+    fence's static depth (not without ``static``) or where the tracker predicts it into
+    the path, standing on the road, ``min_height_m`` tall there and big enough."""
+    c = cfg
+    curvature = yaw_rate_radps / speed_mps if speed_mps > c.min_speed_mps else 0.0
+    half_w = cal.ego_width_m / 2 + c.corridor_margin_m
+    counted = np.zeros(maps.shape[1:], dtype=bool)
+    corridor = np.zeros(maps.shape[1:], dtype=bool)
+    sizes = np.zeros(len(thr), dtype=np.int64)
+    for i, tau in enumerate(thr):
+        if not bands[i].any():
+            continue
+        depth = static_depth_m(cal, speed_mps, tau)
+        region = corridor_mask(cal, bands[i], half_w, depth, curvature)
+        lowest = int(np.flatnonzero(bands[i].any(axis=1)).max())
+        inside = maps[i] > c.prob_inside
+        rows = cal.fy_px * min_height_m / depth if depth > 1e-6 else 0.0
+        area, standing = standing_regions(inside & region & static, lowest, c.contact_px, rows)
+        need = need_px(cal, depth, c.min_region_px, c.min_face_m2)
+        area_p, ahead = standing_regions(predicted & inside & bands[i], lowest, c.contact_px, rows)
+        if area_p > area:
+            area, standing = area_p, ahead
+        if area >= need:
+            sizes[i] = area
+            counted |= standing
+        corridor |= region
+    return sizes, counted, corridor

@@ -103,7 +103,7 @@ import numpy as np
 
 from controllers.base import BrakeCommand, Calibration, Controller, GeofenceView, Observation
 from controllers.derotate import derotate
-from controllers.evidence import corridor_mask, counted_pixels, ground_ttc_map, need_px, standing_regions
+from controllers.evidence import counted_pixels, ground_ttc_map, in_path_evidence
 from controllers.geofence_config import (  # noqa: F401  (re-exported: the controller's settings)
     DEFAULT_FOVEA_FENCES_FROM_S,
     DEFAULT_FRAME_STRIDE,
@@ -118,7 +118,6 @@ from controllers.geofence_config import (  # noqa: F401  (re-exported: the contr
     frame_stride_ok,
 )
 from controllers.path_prediction import PathPrediction
-from controllers.road import static_depth_m
 from controllers.stages import StagedBrake
 
 
@@ -182,48 +181,6 @@ class GeofenceController(Controller):
         tau_ground = ground_ttc_map(self._cals[view], speed_mps, yaw_rate)
         return [counted_pixels(tau_ground, tau, self.cfg.ground_margin) for tau in thr]
 
-    def _evidence(
-        self,
-        maps: np.ndarray,
-        thr: np.ndarray,
-        bands,
-        view: str,
-        speed_mps: float,
-        yaw_rate: float,
-        t_s: float,
-        static: bool = True,
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
-        """Sorted (K, H, W) maps of fences ``thr`` [s] in ``view`` and their counted pixels
-        ``bands`` -> (in-path region size per fence [px], counted mask, corridor mask,
-        regions predicted into the path). Without ``static`` only the tracker's predicted
-        regions count, not the corridor at the fence's static depth."""
-        c, cal = self.cfg, self._cals[view]
-        curvature = yaw_rate / speed_mps if speed_mps > c.min_speed_mps else 0.0
-        half_w = cal.ego_width_m / 2 + c.corridor_margin_m
-        counted = np.zeros(maps.shape[1:], dtype=bool)
-        corridor = np.zeros(maps.shape[1:], dtype=bool)
-        sizes = np.zeros(len(thr), dtype=np.int64)
-        predicted = self._paths.predicted(view, maps.shape[1:], t_s, speed_mps, yaw_rate)
-        for i, tau in enumerate(thr):
-            if not bands[i].any():
-                continue
-            depth = static_depth_m(cal, speed_mps, tau)
-            region = corridor_mask(cal, bands[i], half_w, depth, curvature)
-            lowest = int(np.flatnonzero(bands[i].any(axis=1)).max())
-            inside = maps[i] > c.prob_inside
-            tall = c.min_height_m if view in c.min_height_views else 0.0
-            rows = cal.fy_px * tall / depth if depth > 1e-6 else 0.0
-            area, standing = standing_regions(inside & region & static, lowest, c.contact_px, rows)
-            need = need_px(cal, depth, c.min_region_px, c.min_face_m2)
-            area_p, ahead = standing_regions(predicted & inside & bands[i], lowest, c.contact_px, rows)
-            if area_p > area:
-                area, standing = area_p, ahead
-            if area >= need:
-                sizes[i] = area
-                counted |= standing
-            corridor |= region
-        return sizes, counted, corridor, int(predicted.any())
-
     def _fired(self, view: str, sizes: np.ndarray) -> np.ndarray:
         """In-path region sizes of a view's fences -> which fences fire (nested, persistent)."""
         hits = sizes >= self.cfg.min_region_px
@@ -273,7 +230,12 @@ class GeofenceController(Controller):
                 empty = np.zeros(maps.shape[1:], dtype=bool)
                 sizes, counted, corridor, n_pred = np.zeros(len(thr), dtype=np.int64), empty, empty, 0
             else:
-                sizes, counted, corridor, n_pred = self._evidence(maps, thr, bands, v, s, yaw, obs.t_s, static)
+                predicted = self._paths.predicted(v, maps.shape[1:], obs.t_s, s, yaw)
+                tall = c.min_height_m if v in c.min_height_views else 0.0
+                sizes, counted, corridor = in_path_evidence(
+                    maps, thr, bands, self._cals[v], c, s, yaw, predicted, tall, static
+                )
+                n_pred = int(predicted.any())
             tel[f"predicted_{v}"] = n_pred
             fired = self._fired(v, sizes)
             if fired.any():
