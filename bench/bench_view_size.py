@@ -17,7 +17,7 @@ import argparse
 import numpy as np
 import torch
 
-from bittc_core.benchmark import _interleaved_median_ms
+from bittc_core.benchmark import interleaved_median_ms
 from bittc_core.estimator import make_estimator
 from controllers.geofence import default_thresholds
 
@@ -38,7 +38,7 @@ def main() -> None:
     for i, (hw, k) in enumerate(SIZES):
         est, frames = base.fork(), [rng.integers(0, 256, (*hw, 3), dtype=np.uint8) for _ in range(args.calls + 6)]
         calls[i] = lambda a, b, est=est, frames=frames, k=k: est.geofence(frames[a], frames[b], thr[-k:])
-    ms = _interleaved_median_ms(calls, list(range(args.calls + 6)), warmup=5)  # frames by index, each size its own
+    ms = interleaved_median_ms(calls, list(range(args.calls + 6)), warmup=5)  # frames by index, each size its own
     print(f"streaming geofence calls, {args.threads} threads, {args.calls} interleaved rounds, shipped weights")
     print(f"{'view [px]':>10}{'fences':>8}{'pixels / wide':>15}{'median ms':>11}")
     wide = SIZES[0][0][0] * SIZES[0][0][1]

@@ -54,12 +54,12 @@ class BenchSettings:
             )
 
 
-def _frames(s: BenchSettings, n: int) -> list[np.ndarray]:
+def bench_frames(s: BenchSettings, n: int) -> list[np.ndarray]:
     rng = np.random.default_rng(s.seed)
     return [rng.integers(0, 256, (s.height_px, s.width_px, 3), dtype=np.uint8) for _ in range(n)]
 
 
-def _interleaved_median_ms(calls: dict, frames: list[np.ndarray], warmup: int) -> dict:
+def interleaved_median_ms(calls: dict, frames: list[np.ndarray], warmup: int) -> dict:
     """name -> fn(prev, latest); round j times fn(f_j, f_j+1) of every name in turn, the
     order rotated by one each round (so no setting always follows the same other one).
     -> name -> median wall time [ms] over the rounds after ``warmup``."""
@@ -116,7 +116,7 @@ def run_benchmark(s: BenchSettings = BenchSettings(), weights: str | None = None
     torch.set_num_threads(s.threads)
     est = _network_estimator(s, weights)
     cfg = est.net.config
-    frames = _frames(s, s.calls + s.warmup + 1)
+    frames = bench_frames(s, s.calls + s.warmup + 1)
     print(
         f"config {s.config}: {count_parameters(est.net) / 1e6:.3f} M params, "
         f"{s.height_px}x{s.width_px} px, {torch.get_num_threads()} threads, streaming"
@@ -133,7 +133,7 @@ def run_benchmark(s: BenchSettings = BenchSettings(), weights: str | None = None
     calls["flip_continuous"] = est.fork("flip").continuous
     calls["flow_geofence"] = lambda a, b: flow.geofence(a, b, [1.0, 2.0])
     calls["flow_continuous"] = flow_cont.continuous
-    ms = _interleaved_median_ms(calls, frames, s.warmup)
+    ms = interleaved_median_ms(calls, frames, s.warmup)
     binary = {k: ms[k] for k in s.thresholds}
     ratios, slope_ratio = extra_threshold_ratios(binary)
 
@@ -167,11 +167,11 @@ def run_backend_comparison(s: BenchSettings, estimators: dict) -> dict:
     of every backend timed in the same interleaved rounds; prints the table side by side
     with the ratios to the first backend. -> backend -> {binary_ms, continuous_ms, ...}."""
     torch.set_num_threads(s.threads)
-    frames = _frames(s, s.calls + s.warmup + 1)
+    frames = bench_frames(s, s.calls + s.warmup + 1)
     calls = {}
     for name, est in estimators.items():
         calls |= backend_calls(est, s, prefix=f"{name}:")
-    ms = _interleaved_median_ms(calls, frames, s.warmup)
+    ms = interleaved_median_ms(calls, frames, s.warmup)
     names = list(estimators)
     base = names[0]
     out = {}

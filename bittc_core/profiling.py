@@ -8,7 +8,7 @@ import os
 import platform
 from datetime import date
 
-from bittc_core.benchmark import BenchSettings, _frames, _interleaved_median_ms, backend_calls
+from bittc_core.benchmark import BenchSettings, backend_calls, bench_frames, interleaved_median_ms
 
 
 def measure(est, s: BenchSettings) -> dict:
@@ -16,7 +16,7 @@ def measure(est, s: BenchSettings) -> dict:
     import torch
 
     torch.set_num_threads(s.threads)
-    ms = _interleaved_median_ms(backend_calls(est, s), _frames(s, s.calls + s.warmup + 1), s.warmup)
+    ms = interleaved_median_ms(backend_calls(est, s), bench_frames(s, s.calls + s.warmup + 1), s.warmup)
     return {"binary": {k: round(ms[str(k)], 3) for k in s.thresholds}, "continuous": round(ms["continuous"], 3)}
 
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from bittc_core.benchmark import BenchSettings, _interleaved_median_ms, extra_threshold_ratios
+from bittc_core.benchmark import BenchSettings, extra_threshold_ratios, interleaved_median_ms
 
 
 def test_extra_threshold_ratios_of_a_linear_cost():
@@ -24,7 +24,7 @@ def test_extra_threshold_ratios_see_a_superlinear_cost():
 def test_interleaved_rounds_call_every_setting_on_the_same_pairs_in_turn():
     seen = []
     calls = {name: (lambda a, b, n=name: seen.append((n, a, b))) for name in ("x", "y")}
-    ms = _interleaved_median_ms(calls, [0, 1, 2, 3], warmup=1)
+    ms = interleaved_median_ms(calls, [0, 1, 2, 3], warmup=1)
     assert seen == [("x", 0, 1), ("y", 0, 1), ("y", 1, 2), ("x", 1, 2), ("x", 2, 3), ("y", 2, 3)]
     assert set(ms) == {"x", "y"} and all(v >= 0 for v in ms.values())
 
