@@ -23,6 +23,10 @@ Observation Space (Dict):
     image          Box(0, 255, (H, W, 3))     latest ego-camera frame, uint8 RGB
     image_prev     Box(0, 255, (H, W, 3))     the frame ``frame_stride`` frames before it
     ego_speed_mps  Box(0, 60, (1,))           the ego's own speed at capture [m/s]
+    ego_yaw_rate_radps Box(-5, 5, (1,))       its yaw rate at capture [rad/s], + left
+    pair_yaw_rad   Box(-pi, pi, (1,))         its heading change from image_prev's capture
+                                              to image's [rad], + left (its yaw-rate
+                                              sensor integrated)
     calibration    Box(-1e4, 1e4, (8,))       fx, fy, cx, cy [px], camera height [m],
                                               pitch [deg], bumper ahead of the camera [m],
                                               ego width [m]
@@ -55,6 +59,7 @@ ground and plain vehicles by default).
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import asdict
 
@@ -72,6 +77,7 @@ from sim.loop import ClosedLoop
 from sim.textures import TextureStyle
 from sim.traffic import MAX_SPEED_MPS
 
+MAX_YAW_RATE_RADPS = 5.0  # [rad/s] bound of the yaw-rate observation (a 12 m turn at 20 km/h: 0.46)
 CALIBRATION_BOUND = 1e5  # [px or m or deg] bounds of the calibration vector's space (a fovea's focal too)
 
 
@@ -127,6 +133,8 @@ class ScenarioEnv(gym.Env):
             "image": image,
             "image_prev": image,
             "ego_speed_mps": spaces.Box(0.0, MAX_SPEED_MPS, (1,), np.float32),
+            "ego_yaw_rate_radps": spaces.Box(-MAX_YAW_RATE_RADPS, MAX_YAW_RATE_RADPS, (1,), np.float32),
+            "pair_yaw_rad": spaces.Box(-math.pi, math.pi, (1,), np.float32),
             "calibration": calibration,
         }
         if self.camera.fovea_zoom is not None:
@@ -149,6 +157,10 @@ class ScenarioEnv(gym.Env):
             "image": o.image_latest.copy(),
             "image_prev": o.image_prev.copy(),
             "ego_speed_mps": np.array([min(o.ego_speed_mps, MAX_SPEED_MPS)], np.float32),
+            "ego_yaw_rate_radps": np.clip([o.ego_yaw_rate_radps], -MAX_YAW_RATE_RADPS, MAX_YAW_RATE_RADPS).astype(
+                np.float32
+            ),
+            "pair_yaw_rad": np.array([o.pair_rotation_rad], np.float32),
             "calibration": _calibration_vector(o.calibration),
         }
         if o.calibration.fovea is not None:

@@ -38,7 +38,7 @@ def test_same_seed_same_rollout_and_truth_stays_in_info():
             if term or trunc:
                 break
         env.close()
-        assert set(obs) == {"image", "image_prev", "ego_speed_mps", "calibration"}
+        assert set(obs) == {"image", "image_prev", "ego_speed_mps", "ego_yaw_rate_radps", "pair_yaw_rad", "calibration"}
         assert info["gt"]["tau_s"].shape == obs["image"].shape[:2] and info["critical"]["ttc_s"] > 0
         return images, rewards, info["end_reason"]
 
@@ -146,3 +146,18 @@ def test_measured_mode_charges_the_agents_own_time():
 
     assert next_t(0.0) == pytest.approx(0.2)
     assert next_t(0.25) >= 0.3 - 1e-9
+
+
+def test_a_turning_ego_observes_its_yaw_rate_and_the_pair_s_rotation():
+    env = ScenarioEnv("CCFtap-20-30")
+    obs, _ = env.reset(seed=0)
+    seen = []
+    for _ in range(45):
+        obs, _, term, trunc, _ = env.step(np.array([0.0], np.float32))
+        assert env.observation_space.contains(obs)
+        seen.append((float(obs["ego_yaw_rate_radps"][0]), float(obs["pair_yaw_rad"][0])))
+        if term or trunc:
+            break
+    env.close()
+    assert seen[0] == (0.0, 0.0)  # straight on at first
+    assert max(w for w, _ in seen) > 0.2 and max(p for _, p in seen) > 0.01  # then a left turn
