@@ -30,6 +30,9 @@ D0_M = 30.0  # [m] the target's distance at the first job
 
 
 def _cfg(**tracker):
+    """The tracker's settings; these tests follow its mechanics on a camera without a fovea
+    too (``predict_unchecked``) unless told otherwise."""
+    tracker = {"predict_unchecked": True} | tracker
     return GeofenceConfig(thresholds_s=THR, frame_stride=1, tracker=TrackerConfig(**tracker))
 
 
@@ -57,6 +60,8 @@ def test_a_crossing_child_is_braked_for_before_it_enters_the_corridor():
     first = next(k for k, c in enumerate(cmds) if c.decel_mps2 > 0)
     assert first <= 8  # 1.4 s before the ego arrives, while the child is 2 m right of the path
     assert not _acted(_crossing(_cfg(enabled=False)))
+    # by default a camera without the fovea that checks its bearings predicts nothing
+    assert not _acted(_crossing(_cfg(predict_unchecked=False)))
 
 
 def _fovea_face(dist_m, lateral_m, tau_s, width_m=1.8, height_m=1.5):
