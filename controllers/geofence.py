@@ -190,20 +190,15 @@ class GeofenceController(Controller):
         self._streak[view] = np.where(hits, self._streak[view] + 1, 0)
         return self._streak[view] >= self.cfg.persistence_frames
 
-    def act(self, obs: Observation, truth) -> BrakeCommand:
-        if self.cal is None:
-            raise RuntimeError("call reset(calibration) before act()")
-        c, s = self.cfg, float(obs.ego_speed_mps)
-        yaw = float(obs.ego_yaw_rate_radps)
-        self._paths.start_job(obs.t_s, s, yaw)
+    def _estimate(self, obs: Observation, s: float, yaw: float) -> tuple[dict, float]:
+        """Every view's geofences and counted pixels, its regions handed to the tracker
+        first (the fovea checks the wide view's) -> (view -> (maps, counted pixels per
+        fence or None, whether the corridor rule holds), estimator time [ms])."""
+        c = self.cfg
         # the pair's rotation: the fastest yaw rate of the jobs within it, times its interval
         self._yaws = [(t, w) for t, w in self._yaws if t >= obs.t_s - obs.dt_s - 1e-6] + [(obs.t_s, abs(yaw))]
         turn_rad = max(w for _, w in self._yaws) * obs.dt_s
-        est_ms = 0.0
-        tel: dict = {}
-        views: dict[str, GeofenceView] = {}
-        fired_at: dict[str, float] = {}  # view -> smallest fired threshold [s]
-        jobs = {}  # view -> (maps, counted pixels per fence or None, whether the corridor rule holds)
+        est_ms, jobs = 0.0, {}
         for v, idx in self._fences.items():
             prev, latest = obs.pair(v)
             if latest is None or prev is None:
@@ -219,9 +214,20 @@ class GeofenceController(Controller):
             else:
                 bands = self._bands(v, self._thr[idx], s, 0.0) if c.derotate else None
             jobs[v] = (maps, bands, not turned)
-            # every view's regions first: the fovea checks the wide view's; a view that turned
-            # too far without derotation gives none, and its tracks age by a job
+            # a view that turned too far without derotation gives none: its tracks age by a job
             self._paths.observe(v, maps, self._thr[idx], bands, s, obs.t_s)
+        return jobs, est_ms
+
+    def act(self, obs: Observation, truth) -> BrakeCommand:
+        if self.cal is None:
+            raise RuntimeError("call reset(calibration) before act()")
+        c, s = self.cfg, float(obs.ego_speed_mps)
+        yaw = float(obs.ego_yaw_rate_radps)
+        self._paths.start_job(obs.t_s, s, yaw)
+        jobs, est_ms = self._estimate(obs, s, yaw)
+        tel: dict = {}
+        views: dict[str, GeofenceView] = {}
+        fired_at: dict[str, float] = {}  # view -> smallest fired threshold [s]
         for v, idx in self._fences.items():
             thr = self._thr[idx]
             maps, bands, static = jobs[v]
