@@ -126,8 +126,9 @@ class Observation:
     fovea_latest: np.ndarray | None = None  # (H, W, 3) uint8 RGB through the fovea; None without one
     fovea_prev: np.ndarray | None = None
     ego_yaw_rate_radps: float = 0.0  # [rad/s] + turning left, from the car's yaw-rate sensor at the capture
-    # [rad] + left: the ego's heading change from the earlier capture of the pair to the latest,
-    # its yaw-rate sensor integrated; None where unknown (then yaw rate x dt_s)
+    # [rad] + left: the ego's heading change from the earlier capture of the pair to the latest
+    # (what its yaw-rate sensor integrates to; the simulator gives the exact change); None
+    # where unknown (then yaw rate x dt_s)
     pair_yaw_rad: float | None = None
 
     def pair(self, view: str) -> tuple[np.ndarray | None, np.ndarray | None]:

@@ -193,30 +193,35 @@ class GeofenceController(Controller):
     def _estimate(self, obs: Observation, s: float, yaw: float) -> tuple[dict, float]:
         """Every view's geofences and counted pixels, its regions handed to the tracker
         first (the fovea checks the wide view's) -> (view -> (maps, counted pixels per
-        fence or None, whether the corridor rule holds), estimator time [ms])."""
+        fence or None, whether the corridor rule holds), estimator time [ms], the views
+        whose earlier frame was derotated: the network extracted it anew)."""
         c = self.cfg
         # the pair's rotation: the fastest yaw rate of the jobs within it, times its interval
         self._yaws = [(t, w) for t, w in self._yaws if t >= obs.t_s - obs.dt_s - 1e-6] + [(obs.t_s, abs(yaw))]
         turn_rad = max(w for _, w in self._yaws) * obs.dt_s
-        est_ms, jobs = 0.0, {}
+        est_ms, jobs, derotated = 0.0, {}, []
         for v, idx in self._fences.items():
             prev, latest = obs.pair(v)
             if latest is None or prev is None:
                 raise ValueError(f"controller {self.name!r}: the observation has no {v} pair")
             t0 = time.perf_counter()
             turned = turn_rad * self._cals[v].fx_px > c.max_rotation_px
-            if turned and c.derotate:  # the network sees the translation alone, and so does the ground
+            # a turned view is derotated only where its tracker can use it: the network then
+            # sees the translation alone, and so does the ground
+            rotate = turned and c.derotate and v in self._paths.views
+            if rotate:
                 prev = derotate(prev, latest, self._cals[v], obs.pair_rotation_rad)
+                derotated.append(v)
             maps = self._estimators[v].geofence(prev, latest, self._thr_est[idx])
             est_ms += (time.perf_counter() - t0) * 1e3
             if not turned:
                 bands = self._bands(v, self._thr[idx], s, yaw)
             else:
-                bands = self._bands(v, self._thr[idx], s, 0.0) if c.derotate else None
+                bands = self._bands(v, self._thr[idx], s, 0.0) if rotate else None
             jobs[v] = (maps, bands, not turned)
             # a view that turned too far without derotation gives none: its tracks age by a job
             self._paths.observe(v, maps, self._thr[idx], bands, s, obs.t_s)
-        return jobs, est_ms
+        return jobs, est_ms, derotated
 
     def act(self, obs: Observation, truth) -> BrakeCommand:
         if self.cal is None:
@@ -224,7 +229,7 @@ class GeofenceController(Controller):
         c, s = self.cfg, float(obs.ego_speed_mps)
         yaw = float(obs.ego_yaw_rate_radps)
         self._paths.start_job(obs.t_s, s, yaw)
-        jobs, est_ms = self._estimate(obs, s, yaw)
+        jobs, est_ms, derotated = self._estimate(obs, s, yaw)
         tel: dict = {}
         views: dict[str, GeofenceView] = {}
         fired_at: dict[str, float] = {}  # view -> smallest fired threshold [s]
@@ -273,6 +278,7 @@ class GeofenceController(Controller):
             "estimator_ms": round(est_ms, 3),
             "fence_fired_s": tau_hat if tau_hat is not None else "",
             "fired_view": "+".join(fired_views),
+            "derotated": "+".join(derotated),  # views whose earlier frame the network extracted anew
             "stage": stage,
             **tel,
         }

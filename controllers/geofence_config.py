@@ -85,13 +85,13 @@ class GeofenceConfig:
     frame_stride: int = DEFAULT_FRAME_STRIDE  # [frames] the pair is (k - stride, k): 3x the motion per pair
     fovea_fences_from_s: float = DEFAULT_FOVEA_FENCES_FROM_S  # [s] with a fovea: fences below run on the wide view only
     tracker: TrackerConfig = field(default_factory=TrackerConfig)  # fenced regions followed over jobs
-    # warp each pair's earlier frame by the ego's rotation over the pair before the estimator
-    # (controllers.derotate): in a junction turn the network then sees the translation alone
-    derotate: bool = True
-    # [px] without ``derotate``: a view whose pair turned further than this (yaw rate x pair
-    # interval x focal length) gives no evidence in that job: its flow leaves the estimator's
-    # range (a turn: 8 deg in 0.3 s)
+    # [px] a view whose pair turned further than this (yaw rate x pair interval x focal
+    # length; a junction turn: 8 deg in 0.3 s) moves beyond the flow the estimator reads: with
+    # ``derotate`` (and a tracker in that view) its earlier frame is warped by the ego's
+    # rotation over the pair first (controllers.derotate) and only the tracker's predicted
+    # regions count in that job; otherwise the view gives no evidence then
     max_rotation_px: float = 12.0
+    derotate: bool = True
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "thresholds_s", check_thresholds(self.thresholds_s))

@@ -18,7 +18,8 @@ bearing (within ``check_tol_px`` of the wide view; one with enough regions, none
 across the fovea's centre) fails the bearing test:
 a fence's edge in the wide view can stand still for half a second on a parked truck's far
 corner while its true bearing moves out by three pixels. A camera with none of the check
-views (no fovea) tracks and predicts nothing unless ``TrackerConfig.predict_unchecked``.
+views (no fovea) tracks and predicts nothing unless ``TrackerConfig.predict_unchecked``
+(with ``check_views`` empty, every camera predicts unchecked).
 """
 
 from __future__ import annotations
@@ -61,7 +62,8 @@ class PathPrediction:
         self.cfg = cfg  # GeofenceConfig
         t = cfg.tracker
         self.cals = cals
-        checked = t.predict_unchecked or any(v in cals for v in t.check_views)
+        # with check views asked for, a camera that has none of them predicts nothing
+        checked = t.predict_unchecked or not t.check_views or any(v in cals for v in t.check_views)
         self.views = tuple(v for v in cals if t.enabled and checked and (v in t.views or v in t.check_views))
         self.trackers = {v: BlobTracker(t, cals[v]) for v in self.views}
         self.ground_depth = {v: ground_depth_per_row(cals[v]) for v in self.views}

@@ -100,9 +100,9 @@ class TrackerConfig:
     # bearing (within check_tol_px of the predicting view): the fovea sees it 4x finer
     check_views: tuple[str, ...] = ("fovea",)
     check_tol_px: float = 2.0
-    # predict also with a camera that has none of the check views (no fovea); off: such a
-    # camera's tracker predicts nothing, since the wide view alone reads a parked truck's
-    # far corner as a collision course (benign-parked-truck at K = 4)
+    # predict also with a camera that has none of the (non-empty) check views, no fovea; off:
+    # such a camera's tracker predicts nothing, since the wide view alone reads a parked
+    # truck's far corner as a collision course (benign-parked-truck at K = 4)
     predict_unchecked: bool = False
 
     def __post_init__(self) -> None:

@@ -33,7 +33,7 @@ import math
 import time
 from collections import defaultdict
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import cv2
 
@@ -74,7 +74,7 @@ class FrameRecord:
     work: JobWork | None = None  # what its job computed (what a profile charges)
     fence_cover: dict = field(default_factory=dict)  # view -> threshold '<s>' -> share of the critical actor inside
     ego_yaw_rate_radps: float = 0.0  # [rad/s] + left, as the car's yaw-rate sensor reads it
-    ego_heading_rad: float = 0.0  # [rad] + left, as the car integrates its yaw-rate sensor
+    ego_heading_rad: float = 0.0  # [rad] + left, exact (what the car's yaw-rate sensor integrates to)
 
 
 class ClosedLoop:
@@ -188,7 +188,7 @@ class ClosedLoop:
         -> the next job, or None when the run has ended."""
         cmd.check(who)
         job = self._job
-        work = self._work(job.frame)
+        work = self._work(job.frame, cmd)
         L = self.latency.latency_s(compute_s, work)
         rec = self.records[job.frame]
         rec.status, rec.latency_s, rec.wait_s, rec.decided, rec.work = "processed", L, job.wait_s, cmd, work
@@ -199,10 +199,16 @@ class ClosedLoop:
             rec.fence_cover = self.lag_meter.update(views, gts, rec.truth.critical)
         return self._schedule(job.frame, job.start_s + L)
 
-    def _work(self, frame: int) -> JobWork:
-        """What the job on ``frame`` computes: its pair's frames not in the feature cache, per view."""
+    def _work(self, frame: int, cmd: BrakeCommand) -> JobWork:
+        """What the job on ``frame`` computes: its pair's frames not in the feature cache, per
+        view, and one more frame per view whose earlier frame the controller warped
+        (telemetry ``derotated``: no cache holds the warped frame)."""
         pair = (frame - self.stride, frame) if self.pairs else (frame,)
-        return JobWork.of_views(self.view_thresholds, self._pixel_share, self.estimator, self._cache.extractions(pair))
+        work = JobWork.of_views(self.view_thresholds, self._pixel_share, self.estimator, self._cache.extractions(pair))
+        warped = [v for v in str(cmd.telemetry.get("derotated", "")).split("+") if v in self._pixel_share]
+        if not warped:
+            return work
+        return replace(work, extractions=work.extractions + sum(self._pixel_share[v] for v in warped))
 
     def drive(self, controller: Controller) -> None:
         """Run to the end with ``controller`` deciding every job (reset with this car's calibration)."""

@@ -125,7 +125,9 @@ def format_table(summaries: list[dict], markdown: bool = False) -> str:
         return str(v)
 
     measured = {"lag": "fence_lag_s", "ttc_at_first_seen_s": "ttc_at_first_seen_s"}  # camera controllers only
-    cols = [(k, n) for k, n in TABLE_COLUMNS if k not in measured or any(s.get(measured[k]) for s in summaries)]
+    cols = [
+        (k, n) for k, n in TABLE_COLUMNS if k not in measured or any(s.get(measured[k]) is not None for s in summaries)
+    ]
     threats = [s for s in summaries if s["threat"]]
     benign = [s for s in summaries if not s["threat"]]
     avoided = sum(not s["collision"] for s in threats)

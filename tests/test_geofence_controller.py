@@ -227,3 +227,38 @@ def test_fences_below_the_fovea_bound_run_on_the_wide_view_only():
     above = GeofenceController(est, GeofenceConfig(thresholds_s=THR, fovea_fences_from_s=3.0))
     above.reset(FOVEA_CAL)
     assert above.view_thresholds == {"wide": 4, "fovea": 1}
+
+
+def test_a_turned_pair_is_derotated_and_counts_only_the_tracker_s_regions():
+    """A pair that turned past ``max_rotation_px``: the estimator gets the earlier frame
+    warped by the turn, the job reports it (a profile charges its extraction anew), and a
+    car in the bent corridor at the fences' static depth no longer counts there."""
+    from controllers.tracker import TrackerConfig
+
+    class Recording(MapEstimator):
+        def geofence(self, prev, latest, thresholds_s):
+            self.prev = prev
+            return super().geofence(prev, latest, thresholds_s)
+
+    def jobs(yaw_radps, **settings):
+        est = Recording()
+        est.tau = add_box(road(), 20.0, 0.0, 20.0 / SPEED)
+        tracker = TrackerConfig(predict_unchecked=True)  # a wide view that tracks: no fovea here
+        ctrl = GeofenceController(est, GeofenceConfig(thresholds_s=THR, frame_stride=1, tracker=tracker, **settings))
+        ctrl.reset(CAL)
+        prev = np.random.default_rng(0).integers(0, 255, (CAM.height_px, CAM.width_px, 3), dtype=np.uint8)
+        latest = prev.copy()
+        cmds = []
+        for k in range(3):
+            obs = Observation(
+                0.1 * k, SPEED, latest, prev, 0.1, CAL, ego_yaw_rate_radps=yaw_radps, pair_yaw_rad=0.1 * yaw_radps
+            )
+            cmds.append(ctrl.act(obs, None))
+        return cmds, est.prev is prev
+
+    straight, same = jobs(0.0)
+    assert not quiet(straight) and same and straight[-1].telemetry["derotated"] == ""
+    turned, same = jobs(1.0)  # 0.1 rad in the pair: 18 px in the wide view
+    assert quiet(turned) and not same and turned[-1].telemetry["derotated"] == "wide"
+    _, same = jobs(1.0, derotate=False)
+    assert same

@@ -7,6 +7,8 @@ from __future__ import annotations
 
 from dataclasses import replace
 
+import numpy as np
+
 from sim.footage_views import fence_columns
 
 
@@ -46,9 +48,13 @@ def controller_step(run, row: dict, now: dict, before: dict, t_s: float, i: int)
 
     a = run.args
     speed, yaw = (float(run.motion[0][i]), float(run.motion[1][i])) if run.motion else (float(a.ego_speed), 0.0)
+    turn = None  # the pair's rotation [rad]: the yaw rates from its earlier frame on, by the trapezoid rule
+    if run.motion:
+        j, times = int(run.partner[i]), run.clip.times_s
+        turn = float(np.trapezoid(np.asarray(run.motion[1][j : i + 1], float), np.asarray(times[j : i + 1], float)))
     obs = Observation(
         t_s, speed, now["wide"], before["wide"], run.pair_dt_s, run.calibration,
-        now.get("fovea"), before.get("fovea"), ego_yaw_rate_radps=yaw,
+        now.get("fovea"), before.get("fovea"), ego_yaw_rate_radps=yaw, pair_yaw_rad=turn,
     )  # fmt: skip
     row |= {"ego_speed_mps": round(speed, 4), "ego_yaw_rate_radps": round(yaw, 5)}
     cmd = run.ctrl.act(obs, None)

@@ -27,7 +27,7 @@ from sim.sweep import ncap
 
 FCW_TTC_S = 2.1  # [s] NHTSA's FCW confirmation test: a warning at TTC >= 2.1 s for a stopped lead
 RUN_KEYS = ("run_id", "status", "error", "config", "ego_speed_kph", "ncap_band", "folder")
-RESULT_COLUMNS = RUN_KEYS + tuple(k for k in SUMMARY_KEYS if k not in RUN_KEYS) + ("fence_lag_s",)
+RESULT_COLUMNS = RUN_KEYS + tuple(k for k in SUMMARY_KEYS if k not in RUN_KEYS) + ("fence_lag_s", "ttc_at_first_seen_s")
 SUMMARY_COLUMNS = (
     "controller",
     "fovea_zoom",
