@@ -41,6 +41,12 @@ def standing_regions(
     return int(stats[keep, cv2.CC_STAT_AREA].max()), np.isin(labels, keep)
 
 
+def bottom_row(mask: np.ndarray) -> int:
+    """The lowest row (largest index) of a (H, W) bool mask with at least one pixel set:
+    a fence's lowest counted row, a region's bottom."""
+    return int(np.flatnonzero(mask.any(axis=1)).max())
+
+
 def need_px(cal: Calibration, depth_m: float, min_region_px: float, min_face_m2: float) -> float:
     """[px] the smallest standing region that counts at a fence's static depth ``depth_m``:
     at least ``min_region_px``, and the area a face of ``min_face_m2`` covers there."""
@@ -98,7 +104,7 @@ def contact_depth(fenced: np.ndarray, mask: np.ndarray, u0: int, u1: int, ground
     [u0, u1] that the fence leaves free is where it stands; None when the fence reaches the
     image's bottom there (the road under it is inside the fence too: a target closing no
     faster than the ego drives)."""
-    bottom = int(np.flatnonzero(mask.any(axis=1)).max())
+    bottom = bottom_row(mask)
     rows = fenced[bottom:, u0 : u1 + 1].any(axis=1)
     free = np.flatnonzero(~rows)
     if free.size == 0:
@@ -185,7 +191,7 @@ def in_path_evidence(
             continue
         depth = static_depth_m(cal, speed_mps, tau)
         region = corridor_mask(cal, bands[i], half_w, depth, curvature)
-        lowest = int(np.flatnonzero(bands[i].any(axis=1)).max())
+        lowest = bottom_row(bands[i])
         inside = maps[i] > c.prob_inside
         rows = cal.fy_px * min_height_m / depth if depth > 1e-6 else 0.0
         area, standing = standing_regions(inside & region & static, lowest, c.contact_px, rows)

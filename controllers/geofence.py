@@ -190,7 +190,7 @@ class GeofenceController(Controller):
         self._streak[view] = np.where(hits, self._streak[view] + 1, 0)
         return self._streak[view] >= self.cfg.persistence_frames
 
-    def _estimate(self, obs: Observation, s: float, yaw: float) -> tuple[dict, float]:
+    def _estimate(self, obs: Observation, s: float, yaw: float) -> tuple[dict, float, list[str]]:
         """Every view's geofences and counted pixels, its regions handed to the tracker
         first (the fovea checks the wide view's) -> (view -> (maps, counted pixels per
         fence or None, whether the corridor rule holds), estimator time [ms], the views

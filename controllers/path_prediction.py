@@ -29,7 +29,7 @@ import math
 import numpy as np
 
 from controllers.base import Calibration
-from controllers.evidence import Blob, fenced_blobs, inner_edge_slant, need_px
+from controllers.evidence import Blob, bottom_row, fenced_blobs, inner_edge_slant, need_px
 from controllers.road import ground_depth_per_row, static_depth_m
 from controllers.tracker import BlobTracker, Track
 
@@ -98,7 +98,7 @@ class PathPrediction:
             if not bands[i].any():
                 continue
             inside |= (maps[i] > c.prob_inside) & bands[i]
-            lowest = int(np.flatnonzero(bands[i].any(axis=1)).max())
+            lowest = bottom_row(bands[i])
             rows = slice(max(lowest - c.contact_px, 0), lowest + 1)
             touch[rows] |= bands[i][rows]
         blobs = [
