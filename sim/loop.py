@@ -291,7 +291,7 @@ class ClosedLoop:
             self.truth,
             self.queue.active,
             ego_yaw_rate_radps=float(sim.ego.yaw_rate_radps),
-            ego_heading_rad=sim.ego.heading_rad,
+            ego_heading_rad=sim.ego.world_pose()[2],
         )
         self.records.append(rec)
         self._frames[rec.index] = frame

@@ -55,6 +55,8 @@ SUMMARY_KEYS = (
 #: the fence's lag (threshold minus that TTC; the earlier cover of the views), the lag in each view, and
 #: the persistent lag (from the first frame the fence holds to the end); and the critical actor's
 #: bumper-to-bumper TTC when the camera first saw it; see sim.fence_lag
+#: the camera controllers' keys that a suite's summary.csv and a sweep's results.csv carry
+TABLE_CAMERA_KEYS = ("fence_lag_s", "ttc_at_first_seen_s")
 LAG_KEYS = (
     "fence_cover_ttc_s",
     "fence_lag_s",

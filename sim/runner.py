@@ -21,13 +21,13 @@ from sim.fence_lag import FenceLagMeter
 from sim.latency import LatencyMode, parse_latency
 from sim.loop import ClosedLoop
 from sim.run_files import trace_rows, write_outputs
-from sim.run_summary import LAG_KEYS, SUMMARY_KEYS, summarize
+from sim.run_summary import LAG_KEYS, SUMMARY_KEYS, TABLE_CAMERA_KEYS, summarize
 from sim.run_video import video_frame
 from sim.textures import TextureStyle
 from sim.traffic import ActuatorConfig
 from sim.video import VideoWriter
 
-__all__ = ["LAG_KEYS", "SUMMARY_KEYS", "default_latency", "lag_meter_for", "run_case", "summarize"]
+__all__ = ["LAG_KEYS", "SUMMARY_KEYS", "TABLE_CAMERA_KEYS", "default_latency", "lag_meter_for", "run_case", "summarize"]
 
 
 def run_case(

@@ -13,7 +13,7 @@ from scenarios.spec import ScenarioCase
 from sim.camera import CameraConfig
 from sim.latency import LatencyMode
 from sim.ncap_score import format_family_rows
-from sim.runner import SUMMARY_KEYS, run_case
+from sim.runner import SUMMARY_KEYS, TABLE_CAMERA_KEYS, run_case
 from sim.textures import TextureStyle
 
 TABLE_COLUMNS = (
@@ -92,7 +92,7 @@ def _csv_value(v):
 
 
 def write_table(out_dir: Path, summaries: list[dict]) -> None:
-    keys = list(SUMMARY_KEYS) + [k for k in ("fence_lag_s", "ttc_at_first_seen_s") if any(k in s for s in summaries)]
+    keys = list(SUMMARY_KEYS) + [k for k in TABLE_CAMERA_KEYS if any(k in s for s in summaries)]
     buf = io.StringIO()
     w = csv.DictWriter(buf, fieldnames=keys, lineterminator="\n")
     w.writeheader()

@@ -169,11 +169,6 @@ class EgoVehicle(_Sized, Vehicle):
         self.current_accel_mps2 = 0.0
         self.command_decel_mps2 = 0.0
 
-    @property
-    def heading_rad(self) -> float:
-        """[rad] the heading in the world frame (+ left of the start's x axis)."""
-        return -float(self.heading)
-
     def command(self, decel_cmd_mps2: float, dt_s: float) -> None:
         """Advance the actuator by one step with a requested deceleration [m/s^2] (>= 0)."""
         act = self.actuator
