@@ -99,15 +99,19 @@ class Blob:
     contact_depth_m: float | None = None
 
 
-def contact_depth(fenced: np.ndarray, mask: np.ndarray, u0: int, u1: int, ground_depth: np.ndarray) -> float | None:
+def contact_depth(
+    fenced: np.ndarray, mask: np.ndarray, u0: int, u1: int, ground_depth: np.ndarray, lowest_row: int
+) -> float | None:
     """Depth [m] of the ground under a region: below its bottom, the first row of its columns
-    [u0, u1] that the fence leaves free is where it stands; None when the fence reaches the
-    image's bottom there (the road under it is inside the fence too: a target closing no
-    faster than the ego drives)."""
+    [u0, u1] that the fence leaves free is where it stands, if that row lies on the fence's
+    counted rows (down to ``lowest_row``), where the ground is outside the fence; None when it
+    lies lower (the fenced road, or the target itself, runs on below the counted rows: a
+    target closing no faster than the ego drives, or one whose lower part the fence does not
+    judge)."""
     bottom = bottom_row(mask)
     rows = fenced[bottom:, u0 : u1 + 1].any(axis=1)
     free = np.flatnonzero(~rows)
-    if free.size == 0:
+    if free.size == 0 or bottom + int(free[0]) > lowest_row:
         return None
     z = float(ground_depth[bottom + int(free[0])])
     return z if math.isfinite(z) else None
@@ -136,15 +140,26 @@ def fenced_blobs(
     prob_inside: float,
     need_px: float,
     ground_depth: np.ndarray,
+    lowest_rows: list[int],
+    join_rows: int = 0,
 ) -> list[Blob]:
     """Regions of ``inside`` (counted inside pixels, (H, W) bool) that stand on the road,
     i.e. hold a pixel of ``touch`` (the rows where a standing region's bottom lies), of at
     least ``need_px`` pixels, each with the smallest fence of ``thr`` that holds half of it
     and the depth where it stands (``contact_depth`` in that fence; ``ground_depth``: (H,)
-    per row [m])."""
+    per row [m]; ``lowest_rows``: each fence's lowest counted row). Parts one above the
+    other with at most ``join_rows`` rows between them are one region: a road user's upper
+    body counted in a larger fence and its legs in a smaller one, with the rows between
+    counted in neither."""
     if not inside.any():
         return []
     n, labels, stats, _ = cv2.connectedComponentsWithStats(inside.astype(np.uint8), connectivity=8)
+    if join_rows > 0:
+        kernel = np.ones((join_rows + 1, 1), np.uint8)  # each part reaches join_rows rows up
+        grown = cv2.dilate(inside.astype(np.uint8), kernel, anchor=(0, 0))
+        n, groups = cv2.connectedComponents(grown, connectivity=8)
+        labels = np.where(inside, groups, 0).astype(np.int32)
+        stats = _label_stats(labels, n)
     standing = np.zeros(n, dtype=bool)
     standing[labels[touch & inside]] = True
     out = []
@@ -157,9 +172,20 @@ def fenced_blobs(
         u0 = int(stats[k, cv2.CC_STAT_LEFT])
         u1 = u0 + int(stats[k, cv2.CC_STAT_WIDTH]) - 1
         # the smallest fence that holds it: the road between it and the ego shows there first
-        z = contact_depth(maps[i_min] > prob_inside, m, u0, u1, ground_depth)
+        z = contact_depth(maps[i_min] > prob_inside, m, u0, u1, ground_depth, lowest_rows[i_min])
         out.append(Blob(m, float(u0), float(u1), float(thr[i_min]), z))
     return out
+
+
+def _label_stats(labels: np.ndarray, n: int) -> np.ndarray:
+    """(n, 5) ``cv2.connectedComponentsWithStats``-style stats (left, top, width, height,
+    area) of labels 1..n-1 of an (H, W) int map (rows of absent labels: area 0)."""
+    stats = np.zeros((n, 5), dtype=np.int64)
+    for k in range(1, n):
+        rows, cols = np.nonzero(labels == k)
+        if rows.size:
+            stats[k] = (cols.min(), rows.min(), cols.max() - cols.min() + 1, rows.max() - rows.min() + 1, rows.size)
+    return stats
 
 
 def in_path_evidence(

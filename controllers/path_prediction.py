@@ -9,7 +9,10 @@ down to the lowest such rows of a fence. At 50 km/h the largest fence is judged 
 the horizon, above a crossing cyclist's wheels; the smaller fences see it lower down. A
 region must stand up like a road user (``_upright``): span ``min_height_m`` at the static
 depth of its fence, and have an inner edge that does not slant outwards row by row like
-a strip of verge that the network fenced along a fence's boundary.
+a strip of verge that the network fenced along a fence's boundary. Parts one above the
+other with at most ``join_rows`` rows between them are one region: a crossing cyclist's
+upper body counted in the largest fence and its wheels in a smaller one are one target,
+not two tracks that swap their regions job by job.
 
 The check (``TrackerConfig.check_views``): the wide view predicts, and the fovea, which
 sees the same bearings four times finer, checks its bearing test. A wide track predicted
@@ -94,18 +97,18 @@ class PathPrediction:
         need = need_px(cal, static_depth_m(cal, speed_mps, thr[-1]), c.min_region_px, c.min_face_m2)
         inside = np.zeros(maps.shape[1:], dtype=bool)
         touch = np.zeros_like(inside)
+        lowest_rows = [bottom_row(b) if b.any() else -1 for b in bands]
         for i in range(len(thr)) if t.all_fences else [len(thr) - 1]:
             if not bands[i].any():
                 continue
             inside |= (maps[i] > c.prob_inside) & bands[i]
-            lowest = bottom_row(bands[i])
+            lowest = lowest_rows[i]
             rows = slice(max(lowest - c.contact_px, 0), lowest + 1)
             touch[rows] |= bands[i][rows]
-        blobs = [
-            b
-            for b in fenced_blobs(inside, touch, maps, thr, c.prob_inside, need, self.ground_depth[view])
-            if self._upright(b, cal, speed_mps)
-        ]
+        found = fenced_blobs(
+            inside, touch, maps, thr, c.prob_inside, need, self.ground_depth[view], lowest_rows, t.join_rows
+        )
+        blobs = [b for b in found if self._upright(b, cal, speed_mps)]
         tracks = self.trackers[view].update(t_s, self.pose, speed_mps, blobs)
         self._seen[view] = list(zip(blobs, tracks))
 

@@ -93,6 +93,9 @@ class TrackerConfig:
     # [m] a region spans at least this height at the static depth of its fence: the road's
     # own fence, running past a fence's counted rows, leaves strips a few rows tall
     min_height_m: float = 0.5
+    # [rows] parts one above the other with at most this many rows between them are one region:
+    # a road user's upper body counted in a larger fence, its legs in a smaller one
+    join_rows: int = 3
     # [px per row] a region whose inner edge slants outwards faster, row by row down, lies on
     # the ground: a strip of verge or road that the network fenced along a fence's boundary
     max_slant_px_per_row: float = 0.5
@@ -119,6 +122,7 @@ class TrackerConfig:
             and self.min_ttc_s > 0
             and 0 <= self.min_speed_mps < self.max_speed_mps
             and self.min_height_m >= 0
+            and self.join_rows >= 0
             and self.check_tol_px >= 0
         )
         if not ok:
