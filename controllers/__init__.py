@@ -25,9 +25,11 @@ REGISTRY: dict[str, str] = {
     "oracle": "controllers.oracle:OracleController",
     "geofence": "controllers.geofence_factory:make_geofence",
     "flow": "controllers.geofence_factory:make_flow",
+    # the geofence policy on exact fences from the per-pixel ground truth: an upper bound
+    "geofence-exact": "controllers.geofence_factory:make_geofence_exact",
 }
 #: controllers whose decisions come from an estimator's geofences (they take thresholds)
-ESTIMATOR_CONTROLLERS = ("geofence", "flow")
+ESTIMATOR_CONTROLLERS = ("geofence", "flow", "geofence-exact")
 
 
 def _load(entry: str, what: str):

@@ -182,6 +182,8 @@ class Controller(ABC):
     name: str = "controller"
     needs_camera: bool = False  # the loop renders frames and hands over pairs
     uses_ground_truth: bool = False  # oracles only
+    # oracles only: the loop adds each view's per-pixel ground truth to ``truth.pixels``
+    uses_pixel_truth: bool = False
     num_alphas: int = 0  # thresholds evaluated per job and view (the K a latency profile charges)
     frame_stride: int = 1  # the pair is (frame k - frame_stride, frame k)
     # what a device profile charges per job (sim.latency): the estimator family, None for none;

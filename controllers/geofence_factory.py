@@ -1,6 +1,7 @@
-"""The bundled geofence controllers, by name (``controllers.CONTROLLERS``): the shipped
-network (``geofence``) or DIS + affine expansion (``flow``) behind the same policy
-(``controllers.geofence.GeofenceController``)."""
+"""The bundled geofence controllers, by name (``controllers.REGISTRY``): the shipped
+network (``geofence``), DIS + affine expansion (``flow``) or the exact fences of the
+ground truth (``geofence-exact``, an upper bound: ``controllers.geofence_exact``) behind
+the same policy (``controllers.geofence.GeofenceController``)."""
 
 from __future__ import annotations
 
@@ -46,3 +47,12 @@ def make_flow(
 
     cfg = _config(thresholds_s, frame_stride, fovea_fences_from_s)
     return GeofenceController(make_estimator("flow"), cfg, name=name)
+
+
+def make_geofence_exact(
+    thresholds_s=None, frame_stride: int | None = None, name: str = "geofence-exact", fovea_fences_from_s=None
+) -> GeofenceController:
+    """The same policy on the exact fences of the per-pixel ground truth (not deployable)."""
+    from controllers.geofence_exact import ExactFenceController
+
+    return ExactFenceController(_config(thresholds_s, frame_stride, fovea_fences_from_s), name=name)

@@ -31,7 +31,9 @@ class StepTruth:
     ego_speed_mps: float
     actors: list[ActorTruth]
     critical: ActorTruth | None  # in-path actor ahead with the smallest TTC
-    gt: GroundTruth | None = None  # per-pixel maps (only when the camera renders)
+    # per-pixel maps of each view against the frame before, filled by the loop only for a
+    # controller that asks for them (``Controller.uses_pixel_truth``)
+    pixels: dict[str, GroundTruth] | None = None
     collision: Collision | None = None
 
 

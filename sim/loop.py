@@ -225,6 +225,8 @@ class ClosedLoop:
         while job is not None:
             obs = self.observation(job)
             truth = self.truth_at(job) if controller.uses_ground_truth else None
+            if truth is not None and controller.uses_pixel_truth:
+                truth = replace(truth, pixels={v: self.ground_truth(job.frame, v) for v in controller.views})
             t0 = time.perf_counter()
             cmd = controller.act(obs, truth)
             dt = time.perf_counter() - t0

@@ -32,7 +32,8 @@ def add_parser(sub) -> argparse.ArgumentParser:
         nargs="+",
         default=["geofence", "oracle"],
         metavar="NAME",
-        help="registered controllers (geofence, flow, oracle, none) or module:Class (default geofence oracle)",
+        help="registered controllers (geofence, flow, geofence-exact, oracle, none) or module:Class (default geofence "
+        "oracle)",
     )
     p.add_argument(
         "--num-alphas",
