@@ -117,10 +117,19 @@ class PathPrediction:
         out = np.zeros(shape, dtype=bool)
         if view not in self.views or view not in self.cfg.tracker.views:
             return out
+        t, cal = self.cfg.tracker, self.cals[view]
         tracker = self.trackers[view]
         for blob, track in self._seen.get(view, []):
-            if tracker.in_path(track, t_s, self.pose, speed_mps, yaw_rate) and not self._refuted(view, track):
+            if tracker.in_path(track, t_s, self.pose, speed_mps, yaw_rate):
+                # a road user's width at most: a held stretch of scenery would pass the persistence
+                depth_m = static_depth_m(cal, speed_mps, blob.tau_bound_s)
+                width_m = (blob.u_right - blob.u_left + 1) / cal.fx_px * depth_m
+                track.held = 1 + (t.hold_jobs if width_m <= t.hold_max_width_m else 0)
+            elif track.held > 0 and not tracker.closing_in(track, track.contact_time_s()):
+                track.held = 0  # its bearing moves out now: nothing to hold
+            if track.held > 0 and not self._refuted(view, track):
                 out |= blob.mask
+            track.held = max(track.held - 1, 0)
         return out
 
     def _refuted(self, view: str, track: Track) -> bool:

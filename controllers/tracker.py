@@ -41,6 +41,11 @@ Per job and view:
    association) or below ``min_speed_mps`` (standing: the corridor rule judges it; a
    turning ego's arc, held beyond the turn, would sweep the kerbs and houses on its
    inside) predict nothing.
+5. **Hold**: a track predicted into the path that is no wider than ``hold_max_width_m``
+   (a road user) keeps counting for ``hold_jobs`` more jobs while its bearing still comes
+   in (``controllers.path_prediction``): the inner edge of a crossing cyclist, a few
+   pixels of its rider, swings the fitted crossing point by metres from job to job, and
+   the fence needs consecutive jobs to fire.
 
 The regions, and the fovea's check of the wide view's bearing test:
 ``controllers.path_prediction``.
@@ -93,6 +98,10 @@ class TrackerConfig:
     # [m] a region spans at least this height at the static depth of its fence: the road's
     # own fence, running past a fence's counted rows, leaves strips a few rows tall
     min_height_m: float = 0.5
+    # [jobs] a track predicted into the path counts for this many more jobs in which the
+    # prediction fails: a crossing cyclist's few pixels of edge swing its fit from job to job
+    hold_jobs: int = 2
+    hold_max_width_m: float = 3.0  # [m] only a region this narrow at its fence's static depth is held
     # [rows] parts one above the other with at most this many rows between them are one region:
     # a road user's upper body counted in a larger fence, its legs in a smaller one
     join_rows: int = 3
@@ -123,6 +132,8 @@ class TrackerConfig:
             and 0 <= self.min_speed_mps < self.max_speed_mps
             and self.min_height_m >= 0
             and self.join_rows >= 0
+            and self.hold_jobs >= 0
+            and self.hold_max_width_m >= 0
             and self.check_tol_px >= 0
         )
         if not ok:
@@ -150,6 +161,7 @@ class Track:
     obs: list[_Obs] = field(default_factory=list)
     missed: int = 0
     refuted: bool = False  # a finer view found its bearing moving out: it predicts no more
+    held: int = 0  # [jobs] left in which it counts as predicted though its prediction fails
 
     @property
     def centre_px(self) -> float:

@@ -4,7 +4,7 @@ region counts only where the fence judges the ground."""
 
 import numpy as np
 
-from controllers.evidence import contact_depth, fenced_blobs
+from controllers.evidence import Blob, contact_depth, fenced_blobs
 
 H, W = 40, 60
 THR = np.array([1.0, 2.0])  # [s]
@@ -47,3 +47,35 @@ def test_the_ground_under_a_region_counts_only_on_the_fence_s_counted_rows():
     # the fenced road runs on below it to the image's bottom
     fenced[20:, 18:27] = True
     assert contact_depth(fenced, region, 20, 24, DEPTH, lowest_row=30) is None
+
+
+def _held(hold_jobs: int, in_path, closing=True, width_px: int = 4):
+    """Which of the jobs' calls of ``predicted`` count a region whose track the tracker
+    predicts into the path as ``in_path`` says, job by job."""
+    from controllers.geofence import GeofenceConfig
+    from controllers.path_prediction import PathPrediction
+    from controllers.tracker import Track, TrackerConfig, _Obs
+    from tests.test_geofence_controller import CAL, SPEED
+
+    cfg = GeofenceConfig(tracker=TrackerConfig(hold_jobs=hold_jobs, predict_unchecked=True))
+    paths = PathPrediction(cfg, {"wide": CAL})
+    mask = np.zeros((CAL.height_px, CAL.width_px), dtype=bool)
+    mask[40:50, 200 : 200 + width_px] = True
+    blob = Blob(mask, 200.0, 200.0 + width_px - 1, 1.5)
+    track = Track(obs=[_Obs(0.0, blob.u_left, blob.u_right, 1.5, None, SPEED, (0.0, 0.0, 0.0))])
+    tracker, answers = paths.trackers["wide"], iter(in_path)
+    tracker.in_path = lambda *args: next(answers)
+    tracker.closing_in = lambda *args: closing
+    out = []
+    for k in range(len(in_path)):
+        paths._seen["wide"] = [(blob, track)]
+        out.append(bool(paths.predicted("wide", mask.shape, 0.1 * k, SPEED, 0.0).any()))
+    return out
+
+
+def test_a_road_user_s_prediction_is_held_while_its_bearing_still_closes_in():
+    seq = [True, False, False, False, True, False]
+    assert _held(0, seq) == seq
+    assert _held(2, seq) == [True, True, True, False, True, True]
+    assert _held(2, seq, closing=False) == seq  # its bearing moves out: nothing to hold
+    assert _held(2, seq, width_px=120) == seq  # wider than a road user: scenery, not held
