@@ -99,19 +99,15 @@ class Blob:
     contact_depth_m: float | None = None
 
 
-def contact_depth(
-    fenced: np.ndarray, mask: np.ndarray, u0: int, u1: int, ground_depth: np.ndarray, lowest_row: int
-) -> float | None:
+def contact_depth(fenced: np.ndarray, mask: np.ndarray, u0: int, u1: int, ground_depth: np.ndarray) -> float | None:
     """Depth [m] of the ground under a region: below its bottom, the first row of its columns
-    [u0, u1] that the fence leaves free is where it stands, if that row lies on the fence's
-    counted rows (down to ``lowest_row``), where the ground is outside the fence; None when it
-    lies lower (the fenced road, or the target itself, runs on below the counted rows: a
-    target closing no faster than the ego drives, or one whose lower part the fence does not
-    judge)."""
+    [u0, u1] that the fence leaves free is where it stands; None when the fence reaches the
+    image's bottom there (the road under it is inside the fence too: a target closing no
+    faster than the ego drives)."""
     bottom = bottom_row(mask)
     rows = fenced[bottom:, u0 : u1 + 1].any(axis=1)
     free = np.flatnonzero(~rows)
-    if free.size == 0 or bottom + int(free[0]) > lowest_row:
+    if free.size == 0:
         return None
     z = float(ground_depth[bottom + int(free[0])])
     return z if math.isfinite(z) else None
@@ -140,17 +136,15 @@ def fenced_blobs(
     prob_inside: float,
     need_px: float,
     ground_depth: np.ndarray,
-    lowest_rows: list[int],
     join_rows: int = 0,
 ) -> list[Blob]:
     """Regions of ``inside`` (counted inside pixels, (H, W) bool) that stand on the road,
     i.e. hold a pixel of ``touch`` (the rows where a standing region's bottom lies), of at
     least ``need_px`` pixels, each with the smallest fence of ``thr`` that holds half of it
     and the depth where it stands (``contact_depth`` in that fence; ``ground_depth``: (H,)
-    per row [m]; ``lowest_rows``: each fence's lowest counted row). Parts one above the
-    other with at most ``join_rows`` rows between them are one region: a road user's upper
-    body counted in a larger fence and its legs in a smaller one, with the rows between
-    counted in neither."""
+    per row [m]). Parts one above the other with at most ``join_rows`` rows between them
+    are one region: a road user's upper body counted in a larger fence and its legs in a
+    smaller one, with the rows between counted in neither."""
     if not inside.any():
         return []
     n, labels, stats, _ = cv2.connectedComponentsWithStats(inside.astype(np.uint8), connectivity=8)
@@ -172,7 +166,7 @@ def fenced_blobs(
         u0 = int(stats[k, cv2.CC_STAT_LEFT])
         u1 = u0 + int(stats[k, cv2.CC_STAT_WIDTH]) - 1
         # the smallest fence that holds it: the road between it and the ego shows there first
-        z = contact_depth(maps[i_min] > prob_inside, m, u0, u1, ground_depth, lowest_rows[i_min])
+        z = contact_depth(maps[i_min] > prob_inside, m, u0, u1, ground_depth)
         out.append(Blob(m, float(u0), float(u1), float(thr[i_min]), z))
     return out
 

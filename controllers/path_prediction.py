@@ -97,17 +97,14 @@ class PathPrediction:
         need = need_px(cal, static_depth_m(cal, speed_mps, thr[-1]), c.min_region_px, c.min_face_m2)
         inside = np.zeros(maps.shape[1:], dtype=bool)
         touch = np.zeros_like(inside)
-        lowest_rows = [bottom_row(b) if b.any() else -1 for b in bands]
         for i in range(len(thr)) if t.all_fences else [len(thr) - 1]:
             if not bands[i].any():
                 continue
             inside |= (maps[i] > c.prob_inside) & bands[i]
-            lowest = lowest_rows[i]
+            lowest = bottom_row(bands[i])
             rows = slice(max(lowest - c.contact_px, 0), lowest + 1)
             touch[rows] |= bands[i][rows]
-        found = fenced_blobs(
-            inside, touch, maps, thr, c.prob_inside, need, self.ground_depth[view], lowest_rows, t.join_rows
-        )
+        found = fenced_blobs(inside, touch, maps, thr, c.prob_inside, need, self.ground_depth[view], t.join_rows)
         blobs = [b for b in found if self._upright(b, cal, speed_mps)]
         tracks = self.trackers[view].update(t_s, self.pose, speed_mps, blobs)
         self._seen[view] = list(zip(blobs, tracks))
