@@ -147,13 +147,13 @@ def fenced_blobs(
     smaller one, with the rows between counted in neither."""
     if not inside.any():
         return []
-    n, labels, stats, _ = cv2.connectedComponentsWithStats(inside.astype(np.uint8), connectivity=8)
-    if join_rows > 0:
-        kernel = np.ones((join_rows + 1, 1), np.uint8)  # each part reaches join_rows rows up
-        grown = cv2.dilate(inside.astype(np.uint8), kernel, anchor=(0, 0))
-        n, groups = cv2.connectedComponents(grown, connectivity=8)
-        labels = np.where(inside, groups, 0).astype(np.int32)
-        stats = _label_stats(labels, n)
+    mask = inside.astype(np.uint8)
+    if join_rows > 0:  # each part reaches join_rows rows up; only columns it already holds
+        mask = cv2.dilate(mask, np.ones((join_rows + 1, 1), np.uint8), anchor=(0, 0))
+    n, labels, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
+    if join_rows > 0:  # the regions are the inside pixels of each group, their area theirs
+        labels = np.where(inside, labels, 0)
+        stats[:, cv2.CC_STAT_AREA] = np.bincount(labels.ravel(), minlength=n)
     standing = np.zeros(n, dtype=bool)
     standing[labels[touch & inside]] = True
     out = []
@@ -169,17 +169,6 @@ def fenced_blobs(
         z = contact_depth(maps[i_min] > prob_inside, m, u0, u1, ground_depth)
         out.append(Blob(m, float(u0), float(u1), float(thr[i_min]), z))
     return out
-
-
-def _label_stats(labels: np.ndarray, n: int) -> np.ndarray:
-    """(n, 5) ``cv2.connectedComponentsWithStats``-style stats (left, top, width, height,
-    area) of labels 1..n-1 of an (H, W) int map (rows of absent labels: area 0)."""
-    stats = np.zeros((n, 5), dtype=np.int64)
-    for k in range(1, n):
-        rows, cols = np.nonzero(labels == k)
-        if rows.size:
-            stats[k] = (cols.min(), rows.min(), cols.max() - cols.min() + 1, rows.max() - rows.min() + 1, rows.size)
-    return stats
 
 
 def in_path_evidence(

@@ -58,9 +58,8 @@ class ExactFenceController(GeofenceController):
 
     def reset(self, calibration: Calibration) -> None:
         self._pair_dt_s = calibration.frame_dt_s * self.cfg.frame_stride
-        blank = np.ones((calibration.height_px, calibration.width_px), np.float32)
-        for est in {id(e): e for e in self._estimators.values()}.values():
-            est.set_ground_truth(blank)  # the warm-up call sees no motion
+        # the wide view's warm-up call in the first reset sees no motion
+        self.estimator.set_ground_truth(np.ones((calibration.height_px, calibration.width_px), np.float32))
         super().reset(calibration)
 
     def act(self, obs: Observation, truth) -> BrakeCommand:

@@ -51,12 +51,12 @@ SUMMARY_KEYS = (
     "unavoidable",
     "points",
 )
+#: the camera controllers' keys that a suite's summary.csv and a sweep's results.csv carry
+TABLE_CAMERA_KEYS = ("fence_lag_s", "ttc_at_first_seen_s")
 #: per threshold [s]: the critical actor's exact camera-plane TTC when the fence first covered half of it,
 #: the fence's lag (threshold minus that TTC; the earlier cover of the views), the lag in each view, and
 #: the persistent lag (from the first frame the fence holds to the end); and the critical actor's
 #: bumper-to-bumper TTC when the camera first saw it; see sim.fence_lag
-#: the camera controllers' keys that a suite's summary.csv and a sweep's results.csv carry
-TABLE_CAMERA_KEYS = ("fence_lag_s", "ttc_at_first_seen_s")
 LAG_KEYS = (
     "fence_cover_ttc_s",
     "fence_lag_s",
