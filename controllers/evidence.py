@@ -88,24 +88,30 @@ def corridor_mask(cal: Calibration, counted: np.ndarray, half_w_m: float, depth_
 @dataclass(frozen=True)
 class Blob:
     """A fenced region standing on the road, anywhere across the view: its pixels, column
-    extent [px], the smallest fence threshold [s] that holds most of it, and the depth [m]
+    extent [px], the smallest fence threshold [s] that holds most of it, the depth [m]
     of the ground where it stands when that shows (None where the fenced road runs on
-    below it)."""
+    below it), and the column [px] of its inner edge (nearest the image centre; None: the
+    end of its extent on that side)."""
 
     mask: np.ndarray
     u_left: float
     u_right: float
     tau_bound_s: float
     contact_depth_m: float | None = None
+    inner_px: float | None = None
 
 
-def contact_depth(fenced: np.ndarray, mask: np.ndarray, u0: int, u1: int, ground_depth: np.ndarray) -> float | None:
+def contact_depth(
+    fenced: np.ndarray, mask: np.ndarray, u0: int, u1: int, ground_depth: np.ndarray, pad_px: int = 0
+) -> float | None:
     """Depth [m] of the ground under a region: below its bottom, the first row of its columns
-    [u0, u1] that the fence leaves free is where it stands; None when the fence reaches the
-    image's bottom there (the road under it is inside the fence too: a target closing no
-    faster than the ego drives)."""
+    [u0, u1], widened by ``pad_px`` each side, that the fence leaves free is where it stands;
+    None when the fence reaches the image's bottom there (the road under it is inside the
+    fence too: a target closing no faster than the ego drives). The widening keeps a
+    walker's swinging leg, which reaches past the columns of its upper body, from leaving
+    the row beside it free."""
     bottom = bottom_row(mask)
-    rows = fenced[bottom:, u0 : u1 + 1].any(axis=1)
+    rows = fenced[bottom:, max(u0 - pad_px, 0) : u1 + pad_px + 1].any(axis=1)
     free = np.flatnonzero(~rows)
     if free.size == 0:
         return None
@@ -137,6 +143,7 @@ def fenced_blobs(
     need_px: float,
     ground_depth: np.ndarray,
     join_rows: int = 0,
+    pad_px: np.ndarray | None = None,
 ) -> list[Blob]:
     """Regions of ``inside`` (counted inside pixels, (H, W) bool) that stand on the road,
     i.e. hold a pixel of ``touch`` (the rows where a standing region's bottom lies), of at
@@ -144,7 +151,8 @@ def fenced_blobs(
     and the depth where it stands (``contact_depth`` in that fence; ``ground_depth``: (H,)
     per row [m]). Parts one above the other with at most ``join_rows`` rows between them
     are one region: a road user's upper body counted in a larger fence and its legs in a
-    smaller one, with the rows between counted in neither."""
+    smaller one, with the rows between counted in neither. ``pad_px`` (K,): per fence, how
+    far beside a region its ground is read (``contact_depth``)."""
     if not inside.any():
         return []
     mask = inside.astype(np.uint8)
@@ -166,7 +174,8 @@ def fenced_blobs(
         u0 = int(stats[k, cv2.CC_STAT_LEFT])
         u1 = u0 + int(stats[k, cv2.CC_STAT_WIDTH]) - 1
         # the smallest fence that holds it: the road between it and the ego shows there first
-        z = contact_depth(maps[i_min] > prob_inside, m, u0, u1, ground_depth)
+        pad = int(pad_px[i_min]) if pad_px is not None else 0
+        z = contact_depth(maps[i_min] > prob_inside, m, u0, u1, ground_depth, pad)
         out.append(Blob(m, float(u0), float(u1), float(thr[i_min]), z))
     return out
 

@@ -11,7 +11,7 @@ import numpy as np
 
 from bittc_core.errors import ConfigError
 from controllers.stages import StageConfig
-from controllers.tracker import TrackerConfig
+from controllers.tracker_config import TrackerConfig
 
 DEFAULT_TAU_RANGE_S = (0.8, 2.8)  # [s] camera-plane TTC spanned by default_thresholds
 MAX_THRESHOLDS = 64  # thresholds per job: the one bound of K (CLI, sweeps, the controller)

@@ -27,6 +27,7 @@ views (no fovea) tracks and predicts nothing unless ``TrackerConfig.predict_unch
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -97,15 +98,21 @@ class PathPrediction:
         need = need_px(cal, static_depth_m(cal, speed_mps, thr[-1]), c.min_region_px, c.min_face_m2)
         inside = np.zeros(maps.shape[1:], dtype=bool)
         touch = np.zeros_like(inside)
+        parts = []  # (fence index, its counted inside pixels), from the smallest fence up
         for i in range(len(thr)) if t.all_fences else [len(thr) - 1]:
             if not bands[i].any():
                 continue
-            inside |= (maps[i] > c.prob_inside) & bands[i]
+            parts.append((i, (maps[i] > c.prob_inside) & bands[i]))
+            inside |= parts[-1][1]
             lowest = bottom_row(bands[i])
             rows = slice(max(lowest - c.contact_px, 0), lowest + 1)
             touch[rows] |= bands[i][rows]
-        found = fenced_blobs(inside, touch, maps, thr, c.prob_inside, need, self.ground_depth[view], t.join_rows)
+        depths = np.array([max(static_depth_m(cal, speed_mps, tau), 1e-6) for tau in thr])
+        pad = np.ceil(cal.fx_px * t.contact_pad_m / depths)
+        found = fenced_blobs(inside, touch, maps, thr, c.prob_inside, need, self.ground_depth[view], t.join_rows, pad)
         blobs = [b for b in found if self._upright(b, cal, speed_mps)]
+        if t.edge_from_largest:
+            blobs = [self._largest_fence_edge(b, parts, cal) for b in blobs]
         tracks = self.trackers[view].update(t_s, self.pose, speed_mps, blobs)
         self._seen[view] = list(zip(blobs, tracks))
 
@@ -119,9 +126,7 @@ class PathPrediction:
         for blob, track in self._seen.get(view, []):
             if tracker.in_path(track, t_s, self.pose, speed_mps, yaw_rate):
                 # a road user's width at most: a held stretch of scenery would pass the persistence
-                depth_m = static_depth_m(cal, speed_mps, blob.tau_bound_s)
-                width_m = (blob.u_right - blob.u_left + 1) / cal.fx_px * depth_m
-                track.held = 1 + (t.hold_jobs if width_m <= t.hold_max_width_m else 0)
+                track.held = 1 + (t.hold_jobs if track.width_m(cal) <= t.road_user_width_m else 0)
             elif track.held > 0 and not tracker.closing_in(track, track.contact_time_s()):
                 track.held = 0  # its bearing moves out now: nothing to hold
             if track.held > 0 and not self._refuted(view, track):
@@ -155,6 +160,20 @@ class PathPrediction:
                     track.refuted = True
                     return True
         return False
+
+    @staticmethod
+    def _largest_fence_edge(blob: Blob, parts: list, cal: Calibration) -> Blob:
+        """``blob`` with its inner edge read on the pixels of the largest fence that holds
+        part of it (``parts``: (fence index, counted inside pixels) from the smallest fence
+        up). A region across the centre keeps its extent."""
+        if blob.u_left <= cal.cx_px <= blob.u_right:
+            return blob
+        for _, part in reversed(parts):
+            cols = np.flatnonzero((blob.mask & part).any(axis=0))
+            if cols.size:
+                inner = cols.max() if blob.u_right < cal.cx_px else cols.min()
+                return dataclasses.replace(blob, inner_px=float(inner))
+        return blob
 
     def _upright(self, blob: Blob, cal: Calibration, speed_mps: float) -> bool:
         """Whether a fenced region stands up like a road user, not flat on the ground: it

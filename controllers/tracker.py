@@ -41,7 +41,7 @@ Per job and view:
    association) or below ``min_speed_mps`` (standing: the corridor rule judges it; a
    turning ego's arc, held beyond the turn, would sweep the kerbs and houses on its
    inside) predict nothing.
-5. **Hold**: a track predicted into the path that is no wider than ``hold_max_width_m``
+5. **Hold**: a track predicted into the path that is no wider than ``road_user_width_m``
    (a road user) keeps counting for ``hold_jobs`` more jobs while its bearing still comes
    in (``controllers.path_prediction``): the inner edge of a crossing cyclist, a few
    pixels of its rider, swings the fitted crossing point by metres from job to job, and
@@ -64,80 +64,7 @@ import numpy as np
 
 from controllers.base import Calibration
 from controllers.evidence import Blob
-
-
-@dataclass(frozen=True)
-class TrackerConfig:
-    enabled: bool = True  # False: only the corridor now counts (the straight-road controller)
-    # the views it runs in: the wide view sees a road user stepping out near the ego; the fovea's
-    # regions are far targets (60 m at 80 km/h) whose coarse depth turns fence noise into motion
-    views: tuple[str, ...] = ("wide",)
-    gate_frac: float = 0.6  # [-] association gate, share of the wider region's width
-    min_gate_px: float = 4.0  # [px]
-    min_hits: int = 3  # [jobs] regions before a track predicts
-    window: int = 6  # [jobs] regions in the motion fit
-    max_missed: int = 2  # [jobs]
-    margin_m: float = 0.25  # [m] beyond the ego's half width, each side
-    target_half_length_m: float = 0.4  # [m] a target's half extent along the ego's heading
-    horizon_pad_s: float = 0.3  # [s] predict this far past the track's TTC
-    step_s: float = 0.05  # [s]
-    min_ttc_s: float = 0.2  # [s] the smallest TTC a depth is placed at
-    max_speed_mps: float = 15.0  # [m/s] a faster fitted ground speed is a bad association
-    min_speed_mps: float = 0.8  # [m/s] a slower target is standing: the corridor rule judges it
-    all_fences: bool = True  # regions of every fence where it is judged, not only the largest's
-    # The three levers below are off by default: each avoids more road users and raises the
-    # false alarms over the scenery seeds (docs/vru.md, "Levers").
-    # a target spans its region's width (unbounded past a cut image side); off: its inner edge
-    extent: bool = False
-    # a region cut by the image's side predicts by its inner edge (its outer edge moves with
-    # the cut); off: it predicts nothing
-    cut_regions: bool = False
-    # the bearing test lets an inner edge move out as fast as one that meets the camera plane
-    # inside the corridor; off: it must come in or hold
-    corridor_allowance: bool = False
-    # [m] a region spans at least this height at the static depth of its fence: the road's
-    # own fence, running past a fence's counted rows, leaves strips a few rows tall
-    min_height_m: float = 0.5
-    # [jobs] a track predicted into the path counts for this many more jobs in which the
-    # prediction fails: a crossing cyclist's few pixels of edge swing its fit from job to job
-    hold_jobs: int = 2
-    hold_max_width_m: float = 3.0  # [m] only a region this narrow at its fence's static depth is held
-    # [rows] parts one above the other with at most this many rows between them are one region:
-    # a road user's upper body counted in a larger fence, its legs in a smaller one
-    join_rows: int = 3
-    # [px per row] a region whose inner edge slants outwards faster, row by row down, lies on
-    # the ground: a strip of verge or road that the network fenced along a fence's boundary
-    max_slant_px_per_row: float = 0.5
-    # views whose tracks check the bearing test of the predicting views' tracks at the same
-    # bearing (within check_tol_px of the predicting view): the fovea sees it 4x finer
-    check_views: tuple[str, ...] = ("fovea",)
-    check_tol_px: float = 2.0
-    # predict also with a camera that has none of the (non-empty) check views, no fovea; off:
-    # such a camera's tracker predicts nothing, since the wide view alone reads a parked
-    # truck's far corner as a collision course (benign-parked-truck at K = 4)
-    predict_unchecked: bool = False
-
-    def __post_init__(self) -> None:
-        ok = (
-            self.gate_frac > 0
-            and self.min_gate_px >= 0
-            and self.min_hits >= 2
-            and self.window >= self.min_hits
-            and self.max_missed >= 0
-            and self.margin_m >= 0
-            and self.target_half_length_m >= 0
-            and self.horizon_pad_s >= 0
-            and self.step_s > 0
-            and self.min_ttc_s > 0
-            and 0 <= self.min_speed_mps < self.max_speed_mps
-            and self.min_height_m >= 0
-            and self.join_rows >= 0
-            and self.hold_jobs >= 0
-            and self.hold_max_width_m >= 0
-            and self.check_tol_px >= 0
-        )
-        if not ok:
-            raise ValueError(f"TrackerConfig out of range: {self}")
+from controllers.tracker_config import TrackerConfig
 
 
 @dataclass
@@ -149,10 +76,14 @@ class _Obs:
     contact_depth_m: float | None
     speed_mps: float
     pose: tuple[float, float, float]  # odometry (x, y, psi) at t
+    inner_px: float | None = None  # [px] its inner edge where read apart from its extent
 
     def inner_bearing(self, cal: Calibration) -> float:
         """x / z of the region's inner edge (its column nearest the image centre)."""
-        inner = self.u_right if self.u_right < cal.cx_px else self.u_left
+        if self.inner_px is not None:
+            inner = self.inner_px
+        else:
+            inner = self.u_right if self.u_right < cal.cx_px else self.u_left
         return (inner - cal.cx_px) / cal.fx_px
 
 
@@ -174,6 +105,12 @@ class Track:
     def contact_time_s(self) -> float:
         """t0 [s]: the earliest time by which the track reaches the camera plane."""
         return min(o.t_s + o.tau_bound_s for o in self.obs)
+
+    def width_m(self, cal: Calibration) -> float:
+        """[m] its latest region's width at the static depth of that region's fence."""
+        o = self.obs[-1]
+        depth_m = o.speed_mps * math.cos(math.radians(cal.pitch_deg)) * o.tau_bound_s
+        return (o.u_right - o.u_left + 1) / cal.fx_px * depth_m
 
 
 class BlobTracker:
@@ -202,7 +139,8 @@ class BlobTracker:
             else:
                 free.remove(best)
             tr = self.tracks[best]
-            tr.obs.append(_Obs(t_s, b.u_left, b.u_right, b.tau_bound_s, b.contact_depth_m, speed_mps, pose))
+            obs = _Obs(t_s, b.u_left, b.u_right, b.tau_bound_s, b.contact_depth_m, speed_mps, pose, b.inner_px)
+            tr.obs.append(obs)
             del tr.obs[: -c.window]
             tr.missed = 0
             out.append(tr)
@@ -243,7 +181,10 @@ class BlobTracker:
         the path (|X| beyond the corridor's half width w) faster than w / (s (t0 -
         t)^2), whatever its depth. t0 is an upper bound of the contact time (the fences
         bound the TTC from above), so the allowance, taken at the window's first job, errs
-        small: a standing object beside the path is never let through."""
+        small: a standing object beside the path is never let through. A track no wider
+        than a road user also holds with ``bearing_tol_px_per_s``; a wider one must come
+        in or hold exactly: a long structure beside the road, fenced up to a fence's static
+        depth s tau, ends at the bearing X / (s tau), which holds whatever X."""
         cal, c = self.cal, self.cfg
         ts, dist = [], []
         psi0 = tr.obs[0].pose[2]
@@ -254,6 +195,11 @@ class BlobTracker:
         ts = np.asarray(ts) - ts[0]
         if np.ptp(ts) <= 0:
             return False
+        slope = float(np.polyfit(ts, dist, 1)[0])
+        if slope <= 0.0:
+            return True
+        if tr.width_m(cal) > c.road_user_width_m:  # scenery: no allowance
+            return False
         o = tr.obs[0]
         closing_mps = o.speed_mps * math.cos(math.radians(cal.pitch_deg))
         tau = max(t0 - o.t_s, c.min_ttc_s)
@@ -262,7 +208,7 @@ class BlobTracker:
             if closing_mps > 0 and c.corridor_allowance
             else 0.0
         )
-        return float(np.polyfit(ts, dist, 1)[0]) <= allowance
+        return slope <= allowance + c.bearing_tol_px_per_s / cal.fx_px
 
     def in_path(self, tr: Track, t_s: float, pose, speed_mps: float, yaw_rate_radps: float) -> bool:
         """Whether track ``tr`` is predicted to enter the ego's widened footprint within its TTC."""

@@ -86,10 +86,12 @@ def test_a_region_cut_by_the_image_side_is_judged_by_its_inner_edge():
 def test_the_corridor_allowance_lets_in_an_edge_that_lands_inside_the_corridor():
     # from 3 m right at 1 m/s: at the ego's arrival its left edge is 0.3 m right of the
     # path's centre, so its bearing moves out, slowly, all the way in
-    assert any(_run(3.0, -1.0, cfg=TrackerConfig(corridor_allowance=True)))
-    assert not any(_run(3.0, -1.0))
+    assert any(_run(3.0, -1.0))
+    assert not any(_run(3.0, -1.0, cfg=TrackerConfig(corridor_allowance=False, bearing_tol_px_per_s=0.0)))
     # a standing target beside the path moves out faster than the allowance
-    assert not any(_run(2.0, 0.0, cfg=TrackerConfig(corridor_allowance=True)))
+    assert not any(_run(2.0, 0.0))
+    # a region wider than a road user (scenery cut at a fence's static depth) has no allowance
+    assert not any(_run(3.0, -1.0, width_m=4.0, cfg=TrackerConfig(bearing_tol_px_per_s=0.0)))
 
 
 def test_ground_ttc_map_is_the_straight_road_rule_without_yaw():

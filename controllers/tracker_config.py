@@ -1,0 +1,99 @@
+"""The tracker's settings (``controllers.tracker``): association, motion fit, prediction,
+the bearing test and its allowances, the hold, and where a region's edges are read. Units
+on every field; defaults as measured in docs/vru.md."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class TrackerConfig:
+    enabled: bool = True  # False: only the corridor now counts (the straight-road controller)
+    # the views it runs in: the wide view sees a road user stepping out near the ego; the fovea's
+    # regions are far targets (60 m at 80 km/h) whose coarse depth turns fence noise into motion
+    views: tuple[str, ...] = ("wide",)
+    gate_frac: float = 0.6  # [-] association gate, share of the wider region's width
+    min_gate_px: float = 4.0  # [px]
+    min_hits: int = 3  # [jobs] regions before a track predicts
+    window: int = 6  # [jobs] regions in the motion fit
+    max_missed: int = 2  # [jobs]
+    margin_m: float = 0.25  # [m] beyond the ego's half width, each side
+    target_half_length_m: float = 0.4  # [m] a target's half extent along the ego's heading
+    horizon_pad_s: float = 0.3  # [s] predict this far past the track's TTC
+    step_s: float = 0.05  # [s]
+    min_ttc_s: float = 0.2  # [s] the smallest TTC a depth is placed at
+    max_speed_mps: float = 15.0  # [m/s] a faster fitted ground speed is a bad association
+    min_speed_mps: float = 0.8  # [m/s] a slower target is standing: the corridor rule judges it
+    all_fences: bool = True  # regions of every fence where it is judged, not only the largest's
+    # The two levers below are off by default: each avoids more road users and raises the
+    # false alarms over the scenery seeds (docs/vru.md, "Levers").
+    # a target spans its region's width (unbounded past a cut image side); off: its inner edge
+    extent: bool = False
+    # a region cut by the image's side predicts by its inner edge (its outer edge moves with
+    # the cut); off: it predicts nothing
+    cut_regions: bool = False
+    # a road user's bearing test lets its inner edge move out as fast as one that meets the
+    # camera plane inside the corridor (a pedestrian met at 25 % of the ego's width); off: it
+    # must come in or hold
+    corridor_allowance: bool = True
+    # [px/s] a bearing that moves out no faster than this, in the view's own pixels, holds:
+    # on a collision course the inner edge holds its column, and one pixel's flicker over
+    # the window tips a fitted slope either way (the fovea's check sees 4x finer)
+    bearing_tol_px_per_s: float = 1.0
+    # [m] a region spans at least this height at the static depth of its fence: the road's
+    # own fence, running past a fence's counted rows, leaves strips a few rows tall
+    min_height_m: float = 0.5
+    # [jobs] a track predicted into the path counts for this many more jobs in which the
+    # prediction fails: a crossing cyclist's few pixels of edge swing its fit from job to job
+    hold_jobs: int = 2
+    # [m] a region this narrow at its fence's static depth is a road user's: only such a track
+    # is held, and only its bearing test has the tolerance and the corridor allowance (a long
+    # structure cut at a fence's static depth holds its bearing exactly)
+    road_user_width_m: float = 3.0
+    # [rows] parts one above the other with at most this many rows between them are one region:
+    # a road user's upper body counted in a larger fence, its legs in a smaller one
+    join_rows: int = 3
+    # a region's inner edge is read on the pixels of the largest fence that holds part of it:
+    # a smaller fence's counted rows reach lower, where a kerb or verge line crosses its
+    # lowest row at a column that holds still (a collision course to the bearing test)
+    edge_from_largest: bool = True
+    # [m] the ground under a region is read this far beside it too, at its fence's static
+    # depth: a walker's swinging leg reaches past the columns of its upper body and would
+    # leave the ground beside it, further away, as the first free row
+    contact_pad_m: float = 0.5
+    # [px per row] a region whose inner edge slants outwards faster, row by row down, lies on
+    # the ground: a strip of verge or road that the network fenced along a fence's boundary
+    max_slant_px_per_row: float = 0.5
+    # views whose tracks check the bearing test of the predicting views' tracks at the same
+    # bearing (within check_tol_px of the predicting view): the fovea sees it 4x finer
+    check_views: tuple[str, ...] = ("fovea",)
+    check_tol_px: float = 2.0
+    # predict also with a camera that has none of the (non-empty) check views, no fovea; off:
+    # such a camera's tracker predicts nothing, since the wide view alone reads a parked
+    # truck's far corner as a collision course (benign-parked-truck at K = 4)
+    predict_unchecked: bool = False
+
+    def __post_init__(self) -> None:
+        ok = (
+            self.gate_frac > 0
+            and self.min_gate_px >= 0
+            and self.min_hits >= 2
+            and self.window >= self.min_hits
+            and self.max_missed >= 0
+            and self.margin_m >= 0
+            and self.target_half_length_m >= 0
+            and self.horizon_pad_s >= 0
+            and self.step_s > 0
+            and self.min_ttc_s > 0
+            and 0 <= self.min_speed_mps < self.max_speed_mps
+            and self.min_height_m >= 0
+            and self.join_rows >= 0
+            and self.contact_pad_m >= 0
+            and self.bearing_tol_px_per_s >= 0
+            and self.hold_jobs >= 0
+            and self.road_user_width_m >= 0
+            and self.check_tol_px >= 0
+        )
+        if not ok:
+            raise ValueError(f"TrackerConfig out of range: {self}")
