@@ -59,6 +59,7 @@ def test_bench_times_the_size_it_is_given(capsys):
     assert "48x96 px" in capsys.readouterr().out
 
 
+@pytest.mark.slow  # whole jobs of both views, timed: about 40 s; CI runs it with -m slow
 def test_bench_fovea_writes_one_row_per_job(tmp_path, capsys):
     import json
 

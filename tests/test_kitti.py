@@ -70,6 +70,7 @@ def test_fit_ttc_is_exact_under_braking_and_stops_at_contact():
     assert np.allclose(tau[:15], (stop / 10.0)[:15], rtol=1e-6) and np.isinf(tau[20])
 
 
+@pytest.mark.slow  # both estimators over a rendered drive: about 45 s; CI runs it with -m slow
 def test_eval_kitti_raw_scores_both_estimators_and_checks_the_export(drive, tmp_path, capsys):
     out = tmp_path / "flow.json"
     argv = ["eval", "--kitti-raw", str(drive), "--method", "flow", "--strides", "1", "3", "--out", str(out)]

@@ -144,6 +144,7 @@ def test_run_charges_what_the_file_predicts(tmp_path):
     assert lat == {10.0 + 20.0 + 20.0 * 4, 2 * 10.0 + 20.0 + 20.0 * 4}
 
 
+@pytest.mark.slow  # times every kind of job: about 40 s; CI runs it with -m slow
 def test_bittc_profile_writes_a_file_that_run_reads(tmp_path, capsys):
     out = tmp_path / "mine.yaml"
     assert main(["profile", "--out", str(out), "--calls", "2", "--name", "ci"]) == 0

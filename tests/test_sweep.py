@@ -189,6 +189,7 @@ def test_one_and_two_workers_give_identical_results(tiny, tmp_path):
         assert f"plots/{png.name}" in report
 
 
+@pytest.mark.slow  # a sweep killed and resumed, then run whole: about 45 s; CI runs it with -m slow
 def test_resume_after_a_kill_gives_the_same_results(tiny, tmp_path):
     args = [
         "--suite",
