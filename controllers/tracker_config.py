@@ -49,8 +49,9 @@ class TrackerConfig:
     hold_jobs: int = 2
     # [m] a region this narrow at its fence's static depth is a road user's: only such a track
     # is held, and only its bearing test has the tolerance and the corridor allowance (a long
-    # structure cut at a fence's static depth holds its bearing exactly)
-    road_user_width_m: float = 3.0
+    # structure cut at a fence's static depth holds its bearing exactly). A child or cyclist
+    # stepping out is one region with the parked car's end beside it: 3.8 m in CBNAO-50-40
+    road_user_width_m: float = 4.5
     # [rows] parts one above the other with at most this many rows between them are one region:
     # a road user's upper body counted in a larger fence, its legs in a smaller one
     join_rows: int = 3

@@ -91,7 +91,7 @@ def test_the_corridor_allowance_lets_in_an_edge_that_lands_inside_the_corridor()
     # a standing target beside the path moves out faster than the allowance
     assert not any(_run(2.0, 0.0))
     # a region wider than a road user (scenery cut at a fence's static depth) has no allowance
-    assert not any(_run(3.0, -1.0, width_m=4.0, cfg=TrackerConfig(bearing_tol_px_per_s=0.0)))
+    assert not any(_run(3.0, -1.0, width_m=6.0, cfg=TrackerConfig(bearing_tol_px_per_s=0.0)))
 
 
 def test_ground_ttc_map_is_the_straight_road_rule_without_yaw():
