@@ -12,7 +12,10 @@ depth of its fence, and have an inner edge that does not slant outwards row by r
 a strip of verge that the network fenced along a fence's boundary. Parts one above the
 other with at most ``join_rows`` rows between them are one region: a crossing cyclist's
 upper body counted in the largest fence and its wheels in a smaller one are one target,
-not two tracks that swap their regions job by job.
+not two tracks that swap their regions job by job. A region's inner edge is read on the
+largest fence that holds part of it (``TrackerConfig.edge_from_largest``): a smaller
+fence's counted rows reach lower, where a kerb line crosses its lowest row at a column that
+holds still.
 
 The check (``TrackerConfig.check_views``): the wide view predicts, and the fovea, which
 sees the same bearings four times finer, checks its bearing test. A wide track predicted

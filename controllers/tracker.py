@@ -19,10 +19,11 @@ Per job and view:
    ground under a region shows (the road below it lies outside the fence: it closes
    faster than the ego drives, an oncoming car), that ground's depth is used when it is
    the larger: the static depth would put such a car nearer and so nearer the path.
-3. **Ground motion**: each region's inner edge (the column nearest the image centre) at
-   Z_k, moved into one odometry frame by dead reckoning from the ego's speed and yaw
-   rate, gives the target's velocity over the ground by a least-squares line over the
-   last ``window`` jobs. A region across the centre is in the corridor now: the corridor
+3. **Ground motion**: each region's inner edge (the column nearest the image centre, read
+   on the largest fence that holds part of it: ``edge_from_largest``) at Z_k, moved into
+   one odometry frame by dead reckoning from the ego's speed and yaw rate, gives the
+   target's velocity over the ground by a least-squares line over the last ``window``
+   jobs. A region across the centre is in the corridor now: the corridor
    rule of ``controllers.geofence`` judges it. A region cut by the image's side (its
    outer edge and centre move with the cut) predicts nothing, unless ``cut_regions`` or
    ``extent``.
