@@ -101,12 +101,12 @@ class PathPrediction:
         need = need_px(cal, static_depth_m(cal, speed_mps, thr[-1]), c.min_region_px, c.min_face_m2)
         inside = np.zeros(maps.shape[1:], dtype=bool)
         touch = np.zeros_like(inside)
-        parts = []  # (fence index, its counted inside pixels), from the smallest fence up
+        parts = []  # each judged fence's counted inside pixels, from the smallest fence up
         for i in range(len(thr)) if t.all_fences else [len(thr) - 1]:
             if not bands[i].any():
                 continue
-            parts.append((i, (maps[i] > c.prob_inside) & bands[i]))
-            inside |= parts[-1][1]
+            parts.append((maps[i] > c.prob_inside) & bands[i])
+            inside |= parts[-1]
             lowest = bottom_row(bands[i])
             rows = slice(max(lowest - c.contact_px, 0), lowest + 1)
             touch[rows] |= bands[i][rows]
@@ -165,13 +165,13 @@ class PathPrediction:
         return False
 
     @staticmethod
-    def _largest_fence_edge(blob: Blob, parts: list, cal: Calibration) -> Blob:
+    def _largest_fence_edge(blob: Blob, parts: list[np.ndarray], cal: Calibration) -> Blob:
         """``blob`` with its inner edge read on the pixels of the largest fence that holds
-        part of it (``parts``: (fence index, counted inside pixels) from the smallest fence
+        part of it (``parts``: each fence's counted inside pixels, from the smallest fence
         up). A region across the centre keeps its extent."""
         if blob.u_left <= cal.cx_px <= blob.u_right:
             return blob
-        for _, part in reversed(parts):
+        for part in reversed(parts):
             cols = np.flatnonzero((blob.mask & part).any(axis=0))
             if cols.size:
                 inner = cols.max() if blob.u_right < cal.cx_px else cols.min()

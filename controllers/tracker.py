@@ -65,6 +65,7 @@ import numpy as np
 
 from controllers.base import Calibration
 from controllers.evidence import Blob
+from controllers.road import static_depth_m
 from controllers.tracker_config import TrackerConfig
 
 
@@ -110,8 +111,7 @@ class Track:
     def width_m(self, cal: Calibration) -> float:
         """[m] its latest region's width at the static depth of that region's fence."""
         o = self.obs[-1]
-        depth_m = o.speed_mps * math.cos(math.radians(cal.pitch_deg)) * o.tau_bound_s
-        return (o.u_right - o.u_left + 1) / cal.fx_px * depth_m
+        return (o.u_right - o.u_left + 1) / cal.fx_px * static_depth_m(cal, o.speed_mps, o.tau_bound_s)
 
 
 class BlobTracker:

@@ -41,7 +41,7 @@ def _region_left_of_centre():
     smaller = np.zeros_like(larger)
     smaller[40:43, 60:90] = True
     mask = larger | smaller
-    return Blob(mask, 60.0, 89.0, 2.8), [(0, smaller), (1, larger)]
+    return Blob(mask, 60.0, 89.0, 2.8), [smaller, larger]
 
 
 def test_the_inner_edge_is_read_on_the_largest_fence_that_holds_the_region():
