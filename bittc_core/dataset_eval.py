@@ -13,17 +13,22 @@ from bittc_core.export.parity import Agreement
 from bittc_core.metrics import STATIC_ERROR_TAU_S, MetricAccumulator, threshold_key
 
 
-def evaluate(estimator, dataset, limit: int | None, against=None) -> dict:
+def evaluate(estimator, dataset, limit: int | None, against=None, frame_stride: int = 1) -> dict:
     """The metrics of ``estimator`` on the first ``limit`` pairs; with ``against`` (another
-    backend of the same network) also their agreement (``backend_agreement``)."""
+    backend of the same network) also their agreement (``backend_agreement``).
+    ``frame_stride``: each pair spans that many of the estimator's frame intervals and is
+    read at its own interval (time compressed; the metrics' thresholds are the estimator's)."""
     acc = MetricAccumulator(dt_s=estimator.dt_s)
     agreement = Agreement(acc.thresholds_s) if against is not None else None
     n = len(dataset) if limit is None else min(limit, len(dataset))
     for i in range(n):
         s = dataset[i]
         dt = float(s["dt_s"])
-        if abs(dt - estimator.dt_s) > 1e-6:
-            raise ConfigError(f"sample {i}: dt_s={dt:g} s but the estimator works at {estimator.dt_s:g} s")
+        if abs(dt - frame_stride * estimator.dt_s) > 1e-6 * frame_stride:
+            raise ConfigError(
+                f"sample {i}: dt_s={dt:g} s but the estimator works at {estimator.dt_s:g} s"
+                + (f" x frame stride {frame_stride}" if frame_stride != 1 else "")
+            )
         if isinstance(estimator, OracleEstimator):
             estimator.set_ground_truth(s["eta"])
         t0 = time.perf_counter()

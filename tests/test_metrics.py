@@ -202,6 +202,7 @@ def test_eval_of_the_oracle_is_perfect_and_writes_json(tmp_path):
         scenarios=None,
         kitti_raw=None,
         strides=None,
+        frame_stride=None,
         backend="torch",
         onnx=None,
     )

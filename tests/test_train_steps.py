@@ -258,6 +258,7 @@ def args(**kw):
         inpath_thresholds=0.0,
         lr_mult=[],
         keep_checkpoints=False,
+        frame_stride=1,
     )
     base.update(kw)
     return argparse.Namespace(**base)

@@ -68,7 +68,8 @@ def add_parser(sub) -> argparse.ArgumentParser:
         type=int,
         default=None,
         metavar="N",
-        help="with --scenarios: pair each frame with the one N frames before (default 3, the geofence controller's)",
+        help="with --scenarios: pair each frame with the one N frames before (default 3, the geofence "
+        "controller's); with --data: the dataset's pairs span N of the network's frame intervals (default 1)",
     )
     p.add_argument(
         "--method",
@@ -107,6 +108,8 @@ def _check(args) -> Path:
         )
     if args.strides is not None and args.kitti_raw is None:
         raise CliError("--strides applies to --kitti-raw")
+    if args.frame_stride is not None and args.kitti_raw is not None:
+        raise CliError("--frame-stride applies to --scenarios or --data (--kitti-raw pairs by --strides)")
     if args.method not in METHODS:
         raise CliError(f"--method {args.method!r}: expected one of {METHODS}")
     if args.split not in SPLITS:
@@ -231,7 +234,8 @@ def run(args) -> int:
         "weights": args.weights,
         "tta": args.tta,
         "backend": args.backend,
-        **evaluate(estimator, dataset, args.limit, against),
+        "frame_stride": args.frame_stride or 1,
+        **evaluate(estimator, dataset, args.limit, against, args.frame_stride or 1),
     }
     print(format_table(result))
     write_text_atomic(out, json.dumps(result, indent=2))

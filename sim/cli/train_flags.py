@@ -21,6 +21,14 @@ def add_train_flags(p: argparse.ArgumentParser) -> None:
         help="model config name (paper, cpu-small, cpu-small-gc, cpu-medium, cpu-small-corr, cpu-small-corr-gc, tiny)",
     )
     p.add_argument("--out", required=True, help="best checkpoint path, *.pt")
+    p.add_argument(
+        "--frame-stride",
+        type=int,
+        default=1,
+        metavar="N",
+        help="the dataset's pairs span N of the network's frame intervals, and it learns to read them "
+        "at its own interval (time compressed N x, as `bittc run --frame-stride N` feeds it; default 1)",
+    )
     p.add_argument("--resume", action="store_true", help="continue from <stem>.last.pt")
     p.add_argument(
         "--init",
@@ -137,6 +145,7 @@ def check_train_flags(args) -> None:
         raise CliError(f"--stage {args.stage!r}: expected one of {STAGE_CHOICES}")
     check_device(args.device)
     for flag, value in (
+        ("--frame-stride", args.frame_stride),
         ("--steps", args.steps),
         ("--batch-size", args.batch_size),
         ("--val-every", args.val_every),

@@ -31,7 +31,9 @@ def networks(args):
 
 
 def open_splits(args, net):
-    """-> (train, val) datasets, refused when their frame interval is not the config's."""
+    """-> (train, val) datasets, refused when their frame interval is not the config's times
+    ``--frame-stride``: the labels are scale ratios (eta) of the pair, so a pair N network
+    intervals long teaches the network to read eta on such pairs, at its own interval."""
     from bittc_core.train.data import open_split
 
     try:
@@ -41,10 +43,12 @@ def open_splits(args, net):
         raise flag_error(e, {"dataset": "--data"}) from None
     for name, ds in (("train", train_set), ("val", val_set)):
         dt = float(ds[0]["dt_s"])
-        if abs(dt - net.config.frame_dt_s) > 1e-6:
+        want = args.frame_stride * net.config.frame_dt_s
+        if abs(dt - want) > 1e-6 * args.frame_stride:
             raise CliError(
                 f"--data {args.data!r}: the {name} split has frame interval dt_s = {dt:g} s, but config "
                 f"{args.config!r} is trained at frame_dt_s = {net.config.frame_dt_s:g} s"
+                + (f" and --frame-stride {args.frame_stride} asks for {want:g} s" if args.frame_stride != 1 else "")
             )
     return train_set, val_set
 
