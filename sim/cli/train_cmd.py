@@ -73,7 +73,12 @@ def _train(args, paths) -> int:
             "train_config": {stage: dataclasses.asdict(cfg) for stage, cfg in stage_cfgs.items()},  # as each stage runs
         },
     )
-    meta = {"data": args.data, "seed": args.seed, "frame_stride": args.frame_stride, **({"teacher": args.teacher} if args.teacher else {})}
+    meta = {
+        "data": args.data,
+        "seed": args.seed,
+        "frame_stride": args.frame_stride,
+        **({"teacher": args.teacher} if args.teacher else {}),
+    }
     for stage, cfg in stage_cfgs.items():
         trainer = Trainer(net, args.config, cfg, train_set, val_set, device, paths, meta, teacher=teacher)
         if stage == resume_stage:
