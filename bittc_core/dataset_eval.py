@@ -11,6 +11,7 @@ from bittc_core.errors import ConfigError
 from bittc_core.estimator import OracleEstimator
 from bittc_core.export.parity import Agreement
 from bittc_core.metrics import STATIC_ERROR_TAU_S, MetricAccumulator, threshold_key
+from bittc_core.ttc import pair_spans_stride
 
 
 def evaluate(estimator, dataset, limit: int | None, against=None, frame_stride: int = 1) -> dict:
@@ -24,7 +25,7 @@ def evaluate(estimator, dataset, limit: int | None, against=None, frame_stride: 
     for i in range(n):
         s = dataset[i]
         dt = float(s["dt_s"])
-        if abs(dt - frame_stride * estimator.dt_s) > 1e-6 * frame_stride:
+        if not pair_spans_stride(dt, estimator.dt_s, frame_stride):
             raise ConfigError(
                 f"sample {i}: dt_s={dt:g} s but the estimator works at {estimator.dt_s:g} s"
                 + (f" x frame stride {frame_stride}" if frame_stride != 1 else "")

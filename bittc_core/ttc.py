@@ -45,3 +45,10 @@ def eta_to_tau(eta, dt_s: float):
     with np.errstate(divide="ignore", invalid="ignore"):
         tau = dt_s * eta / (1.0 - eta)
     return np.where(eta == 1.0, np.inf, tau)
+
+
+def pair_spans_stride(pair_dt_s: float, frame_dt_s: float, frame_stride: int = 1) -> bool:
+    """Whether a pair ``pair_dt_s`` [s] apart spans ``frame_stride`` frame intervals of
+    ``frame_dt_s`` [s]: such a pair is read at the network's interval, time compressed
+    ``frame_stride`` x (eta is the pair's; a fence tau_i asks for tau_i / frame_stride)."""
+    return abs(pair_dt_s - frame_stride * frame_dt_s) <= 1e-6 * frame_stride

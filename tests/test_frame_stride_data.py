@@ -4,6 +4,8 @@ eval --data --frame-stride`."""
 
 from __future__ import annotations
 
+import dataclasses
+
 import pytest
 
 from bittc_core.data.synthetic import SyntheticPairs
@@ -15,8 +17,6 @@ from tests.train_helpers import SMALL, cli_args
 
 
 def _splits_at(monkeypatch, dt_s: float):
-    import dataclasses
-
     import bittc_core.train.data as data
 
     pairs = SyntheticPairs(2, dataclasses.replace(SMALL, dt_s=dt_s), seed=0)
@@ -50,8 +50,6 @@ def test_train_refuses_a_frame_stride_below_one(tmp_path):
 
 
 def test_dataset_evaluation_reads_pairs_at_a_frame_stride():
-    import dataclasses
-
     from bittc_core.dataset_eval import evaluate
 
     pairs = SyntheticPairs(2, dataclasses.replace(SMALL, dt_s=0.3), seed=0)

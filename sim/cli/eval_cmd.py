@@ -227,6 +227,7 @@ def run(args) -> int:
     against = None
     if args.backend != "torch":  # the same pairs on torch, for the agreement
         against = make_estimator(args.method, weights=args.weights, device="cpu", tta=args.tta)
+    stride = args.frame_stride or 1  # with --data: the dataset's pairs, at the network's own interval
     result = {
         "method": args.method,
         "split": args.split,
@@ -234,8 +235,8 @@ def run(args) -> int:
         "weights": args.weights,
         "tta": args.tta,
         "backend": args.backend,
-        "frame_stride": args.frame_stride or 1,
-        **evaluate(estimator, dataset, args.limit, against, args.frame_stride or 1),
+        "frame_stride": stride,
+        **evaluate(estimator, dataset, args.limit, against, stride),
     }
     print(format_table(result))
     write_text_atomic(out, json.dumps(result, indent=2))

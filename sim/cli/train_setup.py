@@ -35,6 +35,7 @@ def open_splits(args, net):
     ``--frame-stride``: the labels are scale ratios (eta) of the pair, so a pair N network
     intervals long teaches the network to read eta on such pairs, at its own interval."""
     from bittc_core.train.data import open_split
+    from bittc_core.ttc import pair_spans_stride
 
     try:
         train_set = open_split(args.data, "train", augment=True, seed=args.seed)
@@ -43,8 +44,8 @@ def open_splits(args, net):
         raise flag_error(e, {"dataset": "--data"}) from None
     for name, ds in (("train", train_set), ("val", val_set)):
         dt = float(ds[0]["dt_s"])
-        want = args.frame_stride * net.config.frame_dt_s
-        if abs(dt - want) > 1e-6 * args.frame_stride:
+        if not pair_spans_stride(dt, net.config.frame_dt_s, args.frame_stride):
+            want = args.frame_stride * net.config.frame_dt_s
             raise CliError(
                 f"--data {args.data!r}: the {name} split has frame interval dt_s = {dt:g} s, but config "
                 f"{args.config!r} is trained at frame_dt_s = {net.config.frame_dt_s:g} s"
