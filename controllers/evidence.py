@@ -74,6 +74,38 @@ def counted_pixels(tau_ground: np.ndarray, tau_s: float, ground_margin: float) -
     return (tau_ground > ground_margin * tau_s) & (below > ground_margin * tau_s)
 
 
+def fenced_road_edge(inside: np.ndarray, min_share: float = 0.1) -> int | None:
+    """Row where a fence's run of inside pixels up from the image's bottom row ends (the
+    run's highest row), the median over the columns that have such a run: where the
+    estimator puts the road's own fence edge. None when under ``min_share`` of the columns
+    have one (the near road lies outside the fence, or below the view). An obstacle moves
+    the edge only in its own columns, which the median outvotes unless it fills most of
+    the width."""
+    h = inside.shape[0]
+    outside_up = ~inside[::-1]  # from the bottom row up
+    run = np.where(outside_up.any(axis=0), outside_up.argmax(axis=0), h)
+    have = run > 0
+    if have.sum() < max(min_share * inside.shape[1], 1):
+        return None
+    return int(np.median(h - run[have]))
+
+
+def judged_pixels(tau_ground: np.ndarray, inside: np.ndarray, tau_s: float, cfg) -> np.ndarray:
+    """(H, W) bool: rule 2 of ``controllers.geofence`` for fence ``tau_s``, its inside pixels
+    ``inside`` and the ground's TTC map ``tau_ground``: the pixels whose ground lies outside
+    the fence by ``cfg.ground_margin`` (``counted_pixels``), and above the road's fence edge
+    as the estimator draws it (``fenced_road_edge``) by ``cfg.road_edge_rows`` rows: an
+    estimator that reads the road as closing faster than it does fences it past the
+    boundary, and bumps along that edge would stand in the counted rows like obstacles.
+    Rows whose ground lies outside the fence by ``cfg.road_edge_cap`` always count."""
+    band = counted_pixels(tau_ground, tau_s, cfg.ground_margin)
+    edge = fenced_road_edge(inside) if cfg.road_edge_rows >= 0 else None
+    if edge is None:
+        return band
+    rows = np.arange(band.shape[0])[:, None]
+    return band & ((rows < edge - cfg.road_edge_rows) | counted_pixels(tau_ground, tau_s, cfg.road_edge_cap))
+
+
 def corridor_mask(cal: Calibration, counted: np.ndarray, half_w_m: float, depth_m: float, curvature: float):
     """(H, W) bool: the counted pixels in the columns of the ego's corridor at ``depth_m``
     (its width plus margins, bent along the path of curvature ``curvature`` [1/m]:

@@ -15,7 +15,14 @@ estimator's map p_i = p(0 < tau <= tau_i)):
    rows whose ground lies clearly outside the fence, tau_ground(row) > ``ground_margin``
    * tau_i: an obstacle standing on the road reaches the camera plane sooner than the
    road under its upper part. At standstill tau_ground is +inf: every inside pixel
-   counts (a static world is at tau = inf and inside no fence).
+   counts (a static world is at tau = inf and inside no fence). Optionally (off by
+   default) the estimator's own road edge bounds them too: rows count only
+   ``road_edge_rows`` above the row where the fence's run of inside pixels up from the
+   image's bottom ends (the median over the columns; ``controllers.evidence.
+   judged_pixels``), except rows whose ground lies outside the fence by
+   ``road_edge_cap``. A network that reads the road as closing faster than it does fences
+   it past the boundary, and bumps along that edge stand in the corridor like obstacles
+   (docs/pair_interval.md).
 3. **In the corridor, or predicted into it**: the ego's width plus ``corridor_margin_m``
    on each side, along its path (straight, or bent by its yaw rate:
    ``controllers.evidence``), projected at the depth Z_i = s cos p tau_i of a static
@@ -103,7 +110,7 @@ import numpy as np
 
 from controllers.base import BrakeCommand, Calibration, Controller, GeofenceView, Observation
 from controllers.derotate import derotate
-from controllers.evidence import counted_pixels, ground_ttc_map, in_path_evidence
+from controllers.evidence import ground_ttc_map, in_path_evidence, judged_pixels
 from controllers.geofence_config import (  # noqa: F401  (re-exported: the controller's settings)
     DEFAULT_FOVEA_FENCES_FROM_S,
     DEFAULT_FRAME_STRIDE,
@@ -176,10 +183,11 @@ class GeofenceController(Controller):
         self._quiet = self.cfg.release_frames  # nothing to hold at the start
         self._last = BrakeCommand()
 
-    def _bands(self, view: str, thr: np.ndarray, speed_mps: float, yaw_rate: float) -> list[np.ndarray]:
-        """(H, W) bool per fence of ``thr``: the pixels where it can be judged (rule 2)."""
+    def _bands(self, view: str, maps: np.ndarray, thr: np.ndarray, speed_mps: float, yaw_rate: float) -> list:
+        """(H, W) bool per fence of ``thr`` (its map in ``maps``): the pixels where it can be
+        judged (rule 2)."""
         tau_ground = ground_ttc_map(self._cals[view], speed_mps, yaw_rate)
-        return [counted_pixels(tau_ground, tau, self.cfg.ground_margin) for tau in thr]
+        return [judged_pixels(tau_ground, m > self.cfg.prob_inside, tau, self.cfg) for m, tau in zip(maps, thr)]
 
     def _fired(self, view: str, sizes: np.ndarray) -> np.ndarray:
         """In-path region sizes of a view's fences -> which fences fire (nested, persistent)."""
@@ -215,9 +223,9 @@ class GeofenceController(Controller):
             maps = self._estimators[v].geofence(prev, latest, self._thr_est[idx])
             est_ms += (time.perf_counter() - t0) * 1e3
             if not turned:
-                bands = self._bands(v, self._thr[idx], s, yaw)
+                bands = self._bands(v, maps, self._thr[idx], s, yaw)
             else:
-                bands = self._bands(v, self._thr[idx], s, 0.0) if rotate else None
+                bands = self._bands(v, maps, self._thr[idx], s, 0.0) if rotate else None
             jobs[v] = (maps, bands, not turned)
             # a view that turned too far without derotation gives none: its tracks age by a job
             self._paths.observe(v, maps, self._thr[idx], bands, s, obs.t_s)

@@ -9,11 +9,15 @@ from controllers.geofence import GeofenceController
 from controllers.geofence_config import GeofenceConfig, default_thresholds
 
 
-def _config(thresholds_s, frame_stride: int | None, fovea_fences_from_s: float | None = None) -> GeofenceConfig:
+def _config(
+    thresholds_s, frame_stride: int | None, fovea_fences_from_s: float | None = None, road_edge_rows: int | None = None
+) -> GeofenceConfig:
     thr = tuple(thresholds_s) if thresholds_s is not None else default_thresholds(4)
     kw = {} if frame_stride is None else {"frame_stride": frame_stride}
     if fovea_fences_from_s is not None:
         kw["fovea_fences_from_s"] = float(fovea_fences_from_s)
+    if road_edge_rows is not None:
+        kw["road_edge_rows"] = road_edge_rows
     return GeofenceConfig(thresholds_s=thr, **kw)
 
 
@@ -26,6 +30,7 @@ def make_geofence(
     backend: str = "torch",
     onnx: str | None = None,
     fovea_fences_from_s: float | None = None,
+    road_edge_rows: int | None = None,
 ) -> GeofenceController:
     """The shipped network (or ``weights``) behind the geofence controller; ``backend=
     "onnxruntime", onnx=DIR``: the same weights exported to ``DIR`` (checked against them)."""
@@ -36,23 +41,32 @@ def make_geofence(
         est = make_estimator("bittc", weights=weights or DEFAULT_WEIGHTS, backend=backend, onnx=onnx)
     else:
         est = make_estimator("bittc", weights=weights, device=device, backend=backend, onnx=onnx)
-    return GeofenceController(est, _config(thresholds_s, frame_stride, fovea_fences_from_s), name=name)
+    return GeofenceController(est, _config(thresholds_s, frame_stride, fovea_fences_from_s, road_edge_rows), name=name)
 
 
 def make_flow(
-    thresholds_s=None, frame_stride: int | None = None, name: str = "flow", fovea_fences_from_s: float | None = None
+    thresholds_s=None,
+    frame_stride: int | None = None,
+    name: str = "flow",
+    fovea_fences_from_s: float | None = None,
+    road_edge_rows: int | None = None,
 ) -> GeofenceController:
     """The DIS + affine-expansion baseline behind the same controller logic."""
     from bittc_core.estimator import make_estimator
 
-    cfg = _config(thresholds_s, frame_stride, fovea_fences_from_s)
+    cfg = _config(thresholds_s, frame_stride, fovea_fences_from_s, road_edge_rows)
     return GeofenceController(make_estimator("flow"), cfg, name=name)
 
 
 def make_geofence_exact(
-    thresholds_s=None, frame_stride: int | None = None, name: str = "geofence-exact", fovea_fences_from_s=None
+    thresholds_s=None,
+    frame_stride: int | None = None,
+    name: str = "geofence-exact",
+    fovea_fences_from_s=None,
+    road_edge_rows: int | None = None,
 ) -> GeofenceController:
     """The same policy on the exact fences of the per-pixel ground truth (not deployable)."""
     from controllers.geofence_exact import ExactFenceController
 
-    return ExactFenceController(_config(thresholds_s, frame_stride, fovea_fences_from_s), name=name)
+    cfg = _config(thresholds_s, frame_stride, fovea_fences_from_s, road_edge_rows)
+    return ExactFenceController(cfg, name=name)

@@ -4,7 +4,7 @@ path.
 
 Regions (``TrackerConfig.all_fences``): each fence's inside pixels on the rows where that
 fence can be judged (the ground there lies clearly outside it: ``controllers.evidence.
-counted_pixels``), joined over the fences; a region stands on the road when it reaches
+judged_pixels``), joined over the fences; a region stands on the road when it reaches
 down to the lowest such rows of a fence. At 50 km/h the largest fence is judged only near
 the horizon, above a crossing cyclist's wheels; the smaller fences see it lower down. A
 region must stand up like a road user (``_upright``): span ``min_height_m`` at the static

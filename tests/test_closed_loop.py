@@ -103,6 +103,8 @@ def test_make_refuses_unknown_settings_and_non_controllers():
         (["--controller", "geofence", "--fps", "1", "--num-alphas", "1"], "frame interval 3 s (1 s x stride 3)"),
         (["--controller", "geofence", "--frame-stride", "3", "--ttc-thresholds", "0.4"], "frame interval 0.3 s"),
         (["--controller", "oracle", "--num-alphas", "4"], "not 'oracle'"),
+        (["--controller", "geofence", "--road-edge-rows", "-1"], "--road-edge-rows -1: must be an integer >= 0"),
+        (["--controller", "oracle", "--road-edge-rows", "3"], "not 'oracle'"),
     ],
 )
 def test_bad_input_is_refused_by_name_and_nothing_is_written(tmp_path, capsys, extra, needle):

@@ -100,6 +100,33 @@ def test_a_minimum_height_ignores_a_road_fenced_past_its_boundary(early):
     assert not quiet(_run_with(add_box(road() * early, d, 0.0, d / SPEED), min_height_views=("wide",)))
 
 
+@pytest.mark.parametrize("early", [0.5, 0.6])
+def test_the_road_s_own_fence_edge_bounds_the_counted_rows(early):
+    """The road read as closing faster than it does, with a bump of its fence edge two rows
+    tall in the corridor: without the measured edge (the default) the 0.8 s fence fires on
+    the bump; with it the counted rows end above the edge and the bump, and a car still fires."""
+    bumped = road() * early
+    edge = int(np.flatnonzero(bumped[:, 0] <= THR[0]).min())  # the 0.8 s fence's edge row
+    cols = slice(CAM.width_px // 2 - 6, CAM.width_px // 2 + 6)
+    bumped[edge - 2 : edge, cols] = 0.5 * THR[0]
+    assert not quiet(_run_with(bumped, min_height_views=()))
+    assert quiet(_run_with(bumped, road_edge_rows=1, min_height_views=()))
+    d = 20.0
+    assert not quiet(_run_with(add_box(bumped, d, 0.0, d / SPEED), road_edge_rows=1, min_height_views=()))
+
+
+def test_the_road_edge_settings_are_checked_and_reach_the_controllers():
+    import controllers
+
+    assert GeofenceConfig().road_edge_rows == -1  # off by default
+    for name in ("geofence-exact", "flow"):
+        assert controllers.make(name, road_edge_rows=3).cfg.road_edge_rows == 3
+    with pytest.raises(ConfigError, match="road_edge_rows"):
+        GeofenceConfig(road_edge_rows=-2)
+    with pytest.raises(ConfigError, match="road_edge_cap"):
+        GeofenceConfig(road_edge_cap=1.0)
+
+
 def test_a_car_in_the_adjacent_lane_is_ignored():
     d = 20.0  # a static car 20 m ahead, one lane to the left: tau = d / v
     assert quiet(run(add_box(road(), d, 3.5, d / SPEED)))

@@ -57,6 +57,14 @@ def add_controller_flags(p: argparse.ArgumentParser, default: str | None = None)
         help="geofence/flow with a fovea: fences below S seconds run on the wide view only "
         f"(default {DEFAULT_FOVEA_FENCES_FROM_S:g}; 0: all in both)",
     )
+    p.add_argument(
+        "--road-edge-rows",
+        type=int,
+        default=None,
+        metavar="N",
+        help="geofence/flow: count a fence's pixels only N rows above the road's fence edge as the "
+        "estimator draws it (for networks that fence the road past its static depth; default off)",
+    )
     from sim.cli.common import add_backend_flags
 
     add_backend_flags(p)
@@ -92,6 +100,10 @@ def controller_from_args(args, camera):
             raise CliError(f"--frame-stride: {e}") from None
     if args.fovea_fences_from is not None:
         settings["fovea_fences_from_s"] = args.fovea_fences_from
+    if args.road_edge_rows is not None:
+        if args.road_edge_rows < 0:
+            raise CliError(f"--road-edge-rows {args.road_edge_rows}: must be an integer >= 0")
+        settings["road_edge_rows"] = args.road_edge_rows
     if args.weights is not None:
         if name != "geofence":
             raise CliError(f"--weights applies to the geofence controller, not {name!r}")
@@ -104,7 +116,7 @@ def controller_from_args(args, camera):
         settings.update(backend_kwargs(args))
     if settings and name in controllers.REGISTRY and not takes_fences:
         raise CliError(
-            f"--num-alphas / --ttc-thresholds / --frame-stride / --fovea-fences-from apply to "
+            f"--num-alphas / --ttc-thresholds / --frame-stride / --fovea-fences-from / --road-edge-rows apply to "
             f"{' and '.join(controllers.ESTIMATOR_CONTROLLERS)}, not {name!r}"
         )
     try:
