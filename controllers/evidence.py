@@ -79,8 +79,8 @@ def fenced_road_edge(inside: np.ndarray, min_share: float = 0.1) -> int | None:
     run's highest row), the median over the columns that have such a run: where the
     estimator puts the road's own fence edge. None when under ``min_share`` of the columns
     have one (the near road lies outside the fence, or below the view). An obstacle moves
-    the edge only in its own columns, which the median outvotes unless it fills most of
-    the width."""
+    the edge only in its own columns, which the median outvotes unless it holds most of the
+    columns that have a run (then ``judged_pixels``' cap keeps its upper part)."""
     h = inside.shape[0]
     outside_up = ~inside[::-1]  # from the bottom row up
     run = np.where(outside_up.any(axis=0), outside_up.argmax(axis=0), h)
@@ -93,11 +93,12 @@ def fenced_road_edge(inside: np.ndarray, min_share: float = 0.1) -> int | None:
 def judged_pixels(tau_ground: np.ndarray, inside: np.ndarray, tau_s: float, cfg) -> np.ndarray:
     """(H, W) bool: rule 2 of ``controllers.geofence`` for fence ``tau_s``, its inside pixels
     ``inside`` and the ground's TTC map ``tau_ground``: the pixels whose ground lies outside
-    the fence by ``cfg.ground_margin`` (``counted_pixels``), and above the road's fence edge
-    as the estimator draws it (``fenced_road_edge``) by ``cfg.road_edge_rows`` rows: an
-    estimator that reads the road as closing faster than it does fences it past the
-    boundary, and bumps along that edge would stand in the counted rows like obstacles.
-    Rows whose ground lies outside the fence by ``cfg.road_edge_cap`` always count."""
+    the fence by ``cfg.ground_margin`` (``counted_pixels``), and, with ``cfg.road_edge_rows``
+    = N >= 0, more than N rows above the road's fence edge as the estimator draws it
+    (``fenced_road_edge``; no bound where it finds none): an estimator that reads the road
+    as closing faster than it does fences it past the boundary, and bumps along that edge
+    would stand in the counted rows like obstacles. With the bound on, rows whose ground
+    lies outside the fence by ``cfg.road_edge_cap`` always count."""
     band = counted_pixels(tau_ground, tau_s, cfg.ground_margin)
     edge = fenced_road_edge(inside) if cfg.road_edge_rows >= 0 else None
     if edge is None:

@@ -16,13 +16,13 @@ estimator's map p_i = p(0 < tau <= tau_i)):
    * tau_i: an obstacle standing on the road reaches the camera plane sooner than the
    road under its upper part. At standstill tau_ground is +inf: every inside pixel
    counts (a static world is at tau = inf and inside no fence). Optionally (off by
-   default) the estimator's own road edge bounds them too: rows count only
-   ``road_edge_rows`` above the row where the fence's run of inside pixels up from the
-   image's bottom ends (the median over the columns; ``controllers.evidence.
-   judged_pixels``), except rows whose ground lies outside the fence by
-   ``road_edge_cap``. A network that reads the road as closing faster than it does fences
-   it past the boundary, and bumps along that edge stand in the corridor like obstacles
-   (docs/pair_interval.md).
+   default) the estimator's own road edge bounds them too: only rows more than
+   ``road_edge_rows`` rows above the row where the fence's run of inside pixels up from
+   the image's bottom ends count (the median over the columns, where a tenth of them
+   have such a run; ``controllers.evidence.judged_pixels``), and rows whose ground lies
+   outside the fence by ``road_edge_cap``. A network that reads the road as closing
+   faster than it does fences it past the boundary, and bumps along that edge stand in
+   the corridor like obstacles (docs/pair_interval.md).
 3. **In the corridor, or predicted into it**: the ego's width plus ``corridor_margin_m``
    on each side, along its path (straight, or bent by its yaw rate:
    ``controllers.evidence``), projected at the depth Z_i = s cos p tau_i of a static

@@ -69,12 +69,14 @@ class GeofenceConfig:
     stages: StageConfig = field(default_factory=StageConfig)  # bumper-to-bumper TTC stages
     prob_inside: float = 0.5  # [-] a pixel is inside a fence above this probability
     ground_margin: float = 1.25  # [-] count rows with tau_ground > margin * tau_i
-    # [rows] counted rows end this far above the road's fence edge as the estimator draws it
-    # (the median over the columns; -1, the default: off), except rows with tau_ground >
-    # road_edge_cap * tau_i. For a network that fences the road past its static depth: with the
-    # shipped weights it costs a `vru` case and adds a `benign-vru` false alarm (docs/pair_interval.md)
+    # [rows] only rows more than this many rows above the road's fence edge as the estimator
+    # draws it count (the median over the columns; -1, the default: off). For a network that
+    # fences the road past its static depth; with the shipped weights it costs a `vru` case, a
+    # `benign-vru` false alarm and an early warning (docs/pair_interval.md)
     road_edge_rows: int = -1
-    road_edge_cap: float = 2.0  # [-]
+    # [-] with the bound on, rows with tau_ground > road_edge_cap * tau_i count regardless
+    # (at least ground_margin, checked only when the bound is on)
+    road_edge_cap: float = 2.0
     corridor_margin_m: float = 0.25  # [m] beyond the ego's half width, each side
     min_region_px: int = 8  # [px] smallest connected in-path region
     min_face_m2: float = 0.3  # [m^2] smallest face an obstacle shows at the fence's depth
@@ -107,7 +109,7 @@ class GeofenceConfig:
             "road_edge_rows": not isinstance(self.road_edge_rows, bool)
             and isinstance(self.road_edge_rows, int)
             and self.road_edge_rows >= -1,
-            "road_edge_cap": self.road_edge_cap >= self.ground_margin,
+            "road_edge_cap": self.road_edge_rows < 0 or self.road_edge_cap >= self.ground_margin,
             "corridor_margin_m": self.corridor_margin_m >= 0,
             "min_region_px": self.min_region_px >= 1,
             "contact_px": self.contact_px >= 0,

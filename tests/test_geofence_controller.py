@@ -10,6 +10,7 @@ import pytest
 
 from bittc_core.errors import ConfigError
 from controllers.base import Calibration, Observation
+from controllers.evidence import fenced_road_edge, judged_pixels
 from controllers.geofence import GeofenceConfig, GeofenceController, default_thresholds
 from controllers.road import ground_ttc_per_row
 from sim.camera import CameraConfig, cam_T_ego
@@ -102,9 +103,10 @@ def test_a_minimum_height_ignores_a_road_fenced_past_its_boundary(early):
 
 @pytest.mark.parametrize("early", [0.5, 0.6])
 def test_the_road_s_own_fence_edge_bounds_the_counted_rows(early):
-    """The road read as closing faster than it does, with a bump of its fence edge two rows
-    tall in the corridor: without the measured edge (the default) the 0.8 s fence fires on
-    the bump; with it the counted rows end above the edge and the bump, and a car still fires."""
+    """The road read as closing faster than it does, with a small bump of its fence edge in
+    the corridor: without the bound (the default) the 0.8 s fence fires on the strip of
+    road it fences past the counted rows' boundary; with it the counted rows end above
+    the edge, and a car still fires."""
     bumped = road() * early
     edge = int(np.flatnonzero(bumped[:, 0] <= THR[0]).min())  # the 0.8 s fence's edge row
     cols = slice(CAM.width_px // 2 - 6, CAM.width_px // 2 + 6)
@@ -115,16 +117,42 @@ def test_the_road_s_own_fence_edge_bounds_the_counted_rows(early):
     assert not quiet(_run_with(add_box(bumped, d, 0.0, d / SPEED), road_edge_rows=1, min_height_views=()))
 
 
+def test_the_fenced_road_edge_is_the_median_top_of_the_runs_from_the_bottom():
+    inside = np.zeros((10, 20), dtype=bool)
+    assert fenced_road_edge(inside) is None  # no column has a run from the bottom row
+    inside[6:, :] = True  # the road fenced up to row 6
+    inside[1:, 3:5] = True  # an obstacle in two columns, outvoted
+    assert fenced_road_edge(inside) == 6
+    assert fenced_road_edge(np.ones((10, 20), dtype=bool)) == 0
+    few = np.zeros((10, 20), dtype=bool)
+    few[5:, :1] = True  # one column in twenty: under the tenth
+    assert fenced_road_edge(few) is None
+
+
+def test_the_bound_drops_the_rows_up_to_n_above_the_edge():
+    tau_ground = road()
+    inside = tau_ground <= 2 * THR[0]  # the road fenced to twice its static depth
+    edge = fenced_road_edge(inside)
+    for n in (0, 3):
+        cfg = GeofenceConfig(road_edge_rows=n, road_edge_cap=math.inf)
+        band = judged_pixels(tau_ground, inside, THR[0], cfg)
+        assert int(np.flatnonzero(band.any(axis=1)).max()) == edge - n - 1
+    off = judged_pixels(tau_ground, inside, THR[0], GeofenceConfig())
+    assert int(np.flatnonzero(off.any(axis=1)).max()) > edge  # the default counts the fenced road
+
+
 def test_the_road_edge_settings_are_checked_and_reach_the_controllers():
     import controllers
 
     assert GeofenceConfig().road_edge_rows == -1  # off by default
     for name in ("geofence-exact", "flow"):
         assert controllers.make(name, road_edge_rows=3).cfg.road_edge_rows == 3
-    with pytest.raises(ConfigError, match="road_edge_rows"):
-        GeofenceConfig(road_edge_rows=-2)
+    for bad in (-2, True, 1.5):
+        with pytest.raises(ConfigError, match="road_edge_rows"):
+            GeofenceConfig(road_edge_rows=bad)
+    GeofenceConfig(ground_margin=2.5)  # the cap is checked only with the bound on
     with pytest.raises(ConfigError, match="road_edge_cap"):
-        GeofenceConfig(road_edge_cap=1.0)
+        GeofenceConfig(road_edge_rows=1, road_edge_cap=1.0)
 
 
 def test_a_car_in_the_adjacent_lane_is_ignored():

@@ -62,8 +62,8 @@ def add_controller_flags(p: argparse.ArgumentParser, default: str | None = None)
         type=int,
         default=None,
         metavar="N",
-        help="geofence/flow: count a fence's pixels only N rows above the road's fence edge as the "
-        "estimator draws it (for networks that fence the road past its static depth; default off)",
+        help="geofence/flow: count a fence's pixels only more than N rows above the road's fence edge "
+        "as the estimator draws it (for networks that fence the road past its static depth; default off)",
     )
     from sim.cli.common import add_backend_flags
 
