@@ -15,8 +15,10 @@ from bittc_core.train.targets import (
     INPATH_THRESHOLD_JITTER,
     PIXEL_THRESHOLD_JITTER,
     eta_labels,
+    near_outside,
     sample_eta_at_pixels,
     shift_labels,
+    valid_mask,
 )
 from bittc_core.ttc import tau_to_eta
 from sim.cli import train_cmd
@@ -231,6 +233,30 @@ def test_labels():
     assert sl[0, 0, 0, 0].tolist() == [1, 0] and sl[0, 0, 1, 0].tolist() == [0, 1]
 
 
+def test_near_outside_marks_the_ttc_between_each_threshold_and_twice_it():
+    tau = torch.tensor([0.5, 1.0, 1.5, 1.9, 2.5, 30.0])
+    eta = tau_to_eta(tau, 0.1).view(1, 1, -1)
+    thr = tau_to_eta(torch.tensor([[1.0]]), 0.1)
+    assert near_outside(eta, thr)[0, 0, 0].tolist() == [False, False, True, True, False, False]
+
+
+def test_the_near_outside_weight_weights_scenery_just_outside_each_fence(tmp_path):
+    tr = make_trainer(tmp_path, near_outside_weight=4.0)
+    batch = next(iter(tr.loader))
+    seen = []
+    real = tr.net.classify_eta
+    tr.net.classify_eta = lambda ctx, feats, thr: seen.append((thr, real(ctx, feats, thr))) or seen[-1][1]
+    out = stage_losses(tr.net, tr.cfg, batch, torch.Generator().manual_seed(0), torch.device("cpu"))
+    ((thr, logits),) = seen
+    eta = batch["eta"]
+    near = near_outside(eta, thr) & (batch["instance"] == 0)[:, None]
+    assert near.any()
+    expect = masked_bce(logits, eta_labels(eta, thr), valid_mask(batch)[:, None], torch.where(near, 4.0, 1.0))
+    assert torch.allclose(out["ttc"], expect)
+    with pytest.raises(ValueError, match="near_outside_weight=0"):
+        TrainConfig(near_outside_weight=0)
+
+
 def args(**kw):
     base = dict(
         data="synthetic",
@@ -251,6 +277,7 @@ def args(**kw):
         actor_weight=1.0,
         inpath_weight=1.0,
         vru_weight=1.0,
+        near_outside_weight=1.0,
         lovasz_weight=0.0,
         teacher=None,
         distill_weight=None,
@@ -280,6 +307,7 @@ def args(**kw):
         (dict(actor_weight=0.0), "--actor-weight 0.0"),
         (dict(inpath_weight=-2.0), "--inpath-weight -2.0"),
         (dict(vru_weight=0.0), "--vru-weight 0.0"),
+        (dict(near_outside_weight=-1.0), "--near-outside-weight -1.0"),
         (dict(lovasz_weight=-1.0), "--lovasz-weight -1.0"),
         (dict(freeze_binary=True), "--freeze-binary applies to the continuous stage, not --stage 'binary'"),
         (dict(teacher="missing.pt"), "--teacher 'missing.pt': no such file"),

@@ -36,6 +36,10 @@ class TrainConfig:
     # binary TTC loss weight of pedestrian and cyclist pixels (``data.dataset.class_map``),
     # instead of the two above there: small targets the braking of road users reads
     vru_weight: float = 1.0
+    # binary TTC loss weight of scenery pixels outside a threshold's fence whose TTC is at most
+    # twice the threshold, times the weight above: the road just past a fence's static depth,
+    # which a network read on wide pairs fences (``train.targets.near_outside``)
+    near_outside_weight: float = 1.0
     lovasz_weight: float = 0.0  # binary stage: + this x Lovasz two-class IoU surrogate per map
     # binary stage: + this x BCE towards a frozen teacher's flip-averaged maps (``train.distill``;
     # pixels weighted as in the ground-truth BCE); > 0 needs a teacher network of the same config
@@ -83,6 +87,8 @@ class TrainConfig:
             raise ValueError(f"inpath_weight={self.inpath_weight}: must be > 0")
         if self.vru_weight <= 0:
             raise ValueError(f"vru_weight={self.vru_weight}: must be > 0")
+        if self.near_outside_weight <= 0:
+            raise ValueError(f"near_outside_weight={self.near_outside_weight}: must be > 0")
         if self.lovasz_weight < 0:
             raise ValueError(f"lovasz_weight={self.lovasz_weight}: must be >= 0")
         if self.distill_weight < 0:

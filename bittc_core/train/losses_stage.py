@@ -19,6 +19,7 @@ from bittc_core.train.losses import lovasz_two_class, masked_bce, masked_smooth_
 from bittc_core.train.targets import (
     INPATH_THRESHOLD_JITTER,
     eta_labels,
+    near_outside,
     sample_eta,
     sample_eta_at_pixels,
     sample_shifts_px,
@@ -89,6 +90,10 @@ def stage_losses(
             if c.vru_weight != 1.0 and "actor_class" in batch:  # pedestrians (2) and cyclists (3)
                 weight = torch.where(batch["actor_class"] >= 2, c.vru_weight, weight)
             weight = weight[:, None]
+        if c.near_outside_weight != 1.0:  # scenery just outside each fence, per threshold
+            base = weight if weight is not None else torch.ones_like(eta)[:, None]
+            scenery = (batch["instance"] == 0)[:, None] if "instance" in batch else True
+            weight = torch.where(near_outside(eta, thr) & scenery, c.near_outside_weight * base, base)
         labels = eta_labels(eta, thr)
         out["ttc"] = masked_bce(logits, labels, mask[:, None], weight)
         if c.lovasz_weight > 0:

@@ -70,6 +70,15 @@ def eta_labels(eta: torch.Tensor, thresholds: torch.Tensor) -> torch.Tensor:
     return ((e > 0) & (e <= thresholds[:, :, None, None])).float()
 
 
+def near_outside(eta: torch.Tensor, thresholds: torch.Tensor) -> torch.Tensor:
+    """eta (B, H, W), eta thresholds (B, K) -> bool (B, K, H, W): pixels outside each fence
+    whose TTC is at most twice its threshold. With eta = tau / (tau + dt) (approaching),
+    the threshold eta_k = tau_k / (tau_k + dt) and 2 tau_k gives 2 eta_k / (1 + eta_k),
+    whatever the frame interval dt."""
+    e, t = eta[:, None], thresholds[:, :, None, None]
+    return (e > t) & (e <= 2 * t / (1 + t))
+
+
 def shift_labels(flow_px: torch.Tensor, shifts_px: torch.Tensor) -> torch.Tensor:
     """flow (B, 2, H, W), shifts (B, K, 2) -> float (B, K, 2, H, W) of 1[flow > shift]."""
     return (flow_px[:, None] > shifts_px[..., None, None]).float()

@@ -84,6 +84,13 @@ def _add_loss_flags(p: argparse.ArgumentParser) -> None:
         help="binary stage: loss weight of pedestrian and cyclist pixels, instead of the two above there (default 1)",
     )
     p.add_argument(
+        "--near-outside-weight",
+        type=float,
+        default=1.0,
+        help="binary stage: loss weight of scenery pixels outside a threshold's fence with a TTC at most "
+        "twice the threshold (the road just past a fence's static depth), times the above (default 1)",
+    )
+    p.add_argument(
         "--lovasz-weight",
         type=float,
         default=0.0,
@@ -166,6 +173,8 @@ def check_train_flags(args) -> None:
         raise CliError(f"--inpath-weight {args.inpath_weight}: must be > 0 and finite")
     if not 0 < args.vru_weight < math.inf:
         raise CliError(f"--vru-weight {args.vru_weight}: must be > 0 and finite")
+    if not 0 < args.near_outside_weight < math.inf:
+        raise CliError(f"--near-outside-weight {args.near_outside_weight}: must be > 0 and finite")
     if not 0 <= args.lovasz_weight < math.inf:
         raise CliError(f"--lovasz-weight {args.lovasz_weight}: must be >= 0 and finite")
     if not 0 <= args.pixel_thresholds <= 1:

@@ -70,6 +70,7 @@ def stage_configs(args, net, stages, lr_mults, distill_weight) -> dict:
         actor_weight=args.actor_weight,
         inpath_weight=args.inpath_weight,
         vru_weight=args.vru_weight,
+        near_outside_weight=args.near_outside_weight,
         lovasz_weight=args.lovasz_weight,
         distill_weight=distill_weight,
         pixel_threshold_share=args.pixel_thresholds,
