@@ -2,6 +2,7 @@
 
 import argparse
 import dataclasses
+import math
 
 import pytest
 import torch
@@ -234,10 +235,11 @@ def test_labels():
 
 
 def test_near_outside_marks_the_ttc_between_each_threshold_and_twice_it():
-    tau = torch.tensor([0.5, 1.0, 1.5, 1.9, 2.5, 30.0])
+    tau = torch.tensor([0.5, 1.0, 1.5, 1.9, 2.05, 2.5, 30.0, math.inf, -2.0])
     eta = tau_to_eta(tau, 0.1).view(1, 1, -1)
     thr = tau_to_eta(torch.tensor([[1.0]]), 0.1)
-    assert near_outside(eta, thr)[0, 0, 0].tolist() == [False, False, True, True, False, False]
+    assert near_outside(eta, thr)[0, 0, 0].tolist() == [False, False, True, True, False, False, False, False, False]
+    assert not near_outside(eta, torch.tensor([[1.05]])).any()  # a receding fence has no band
 
 
 def test_the_near_outside_weight_weights_scenery_just_outside_each_fence(tmp_path):

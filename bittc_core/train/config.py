@@ -37,8 +37,9 @@ class TrainConfig:
     # instead of the two above there: small targets the braking of road users reads
     vru_weight: float = 1.0
     # binary TTC loss weight of scenery pixels outside a threshold's fence whose TTC is at most
-    # twice the threshold, times the weight above: the road just past a fence's static depth,
-    # which a network read on wide pairs fences (``train.targets.near_outside``)
+    # twice the threshold, instead of 1 (per threshold; the distillation term alike): the road
+    # just past a fence's static depth, which a network read on wide pairs fences
+    # (``train.targets.near_outside``)
     near_outside_weight: float = 1.0
     lovasz_weight: float = 0.0  # binary stage: + this x Lovasz two-class IoU surrogate per map
     # binary stage: + this x BCE towards a frozen teacher's flip-averaged maps (``train.distill``;

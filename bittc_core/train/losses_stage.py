@@ -92,7 +92,7 @@ def stage_losses(
             weight = weight[:, None]
         if c.near_outside_weight != 1.0:  # scenery just outside each fence, per threshold
             base = weight if weight is not None else torch.ones_like(eta)[:, None]
-            scenery = (batch["instance"] == 0)[:, None] if "instance" in batch else True
+            scenery = (batch["instance"] == 0)[:, None]
             weight = torch.where(near_outside(eta, thr) & scenery, c.near_outside_weight * base, base)
         labels = eta_labels(eta, thr)
         out["ttc"] = masked_bce(logits, labels, mask[:, None], weight)

@@ -74,7 +74,8 @@ def near_outside(eta: torch.Tensor, thresholds: torch.Tensor) -> torch.Tensor:
     """eta (B, H, W), eta thresholds (B, K) -> bool (B, K, H, W): pixels outside each fence
     whose TTC is at most twice its threshold. With eta = tau / (tau + dt) (approaching),
     the threshold eta_k = tau_k / (tau_k + dt) and 2 tau_k gives 2 eta_k / (1 + eta_k),
-    whatever the frame interval dt."""
+    whatever the frame interval dt. Static and receding pixels (eta >= 1), and thresholds
+    at eta >= 1, get no band."""
     e, t = eta[:, None], thresholds[:, :, None, None]
     return (e > t) & (e <= 2 * t / (1 + t))
 

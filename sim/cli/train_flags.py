@@ -88,7 +88,7 @@ def _add_loss_flags(p: argparse.ArgumentParser) -> None:
         type=float,
         default=1.0,
         help="binary stage: loss weight of scenery pixels outside a threshold's fence with a TTC at most "
-        "twice the threshold (the road just past a fence's static depth), times the above (default 1)",
+        "twice the threshold (the road just past a fence's static depth), instead of 1 (default 1)",
     )
     p.add_argument(
         "--lovasz-weight",
