@@ -133,11 +133,12 @@ def test_the_bound_drops_the_rows_up_to_n_above_the_edge():
     tau_ground = road()
     inside = tau_ground <= 2 * THR[0]  # the road fenced to twice its static depth
     edge = fenced_road_edge(inside)
+    fence = inside.astype(np.float32)  # the map, p(0 < tau <= 0.8 s)
     for n in (0, 3):
         cfg = GeofenceConfig(road_edge_rows=n, road_edge_cap=math.inf)
-        band = judged_pixels(tau_ground, inside, THR[0], cfg)
+        band = judged_pixels(tau_ground, fence, THR[0], cfg)
         assert int(np.flatnonzero(band.any(axis=1)).max()) == edge - n - 1
-    off = judged_pixels(tau_ground, inside, THR[0], GeofenceConfig())
+    off = judged_pixels(tau_ground, fence, THR[0], GeofenceConfig())
     assert int(np.flatnonzero(off.any(axis=1)).max()) > edge  # the default counts the fenced road
 
 
