@@ -102,6 +102,14 @@ def _make_correlation_last_live(net):
     net.segnet.corr_last.weight.fill_(0.5)  # into the finest decoder conv
 
 
+def _make_shift_first_live(net):
+    net.segnet.shift_first.weight.fill_(0.5)
+
+
+def _make_shift_last_live(net):
+    net.segnet.shift_last.weight.fill_(0.5)
+
+
 @pytest.mark.parametrize(
     "source, grown, make_live",
     [
@@ -110,6 +118,8 @@ def _make_correlation_last_live(net):
         ("cpu-small", "cpu-small-corr", _make_correlation_first_live),
         ("cpu-small", "cpu-small-corr", _make_correlation_last_live),
         ("cpu-small-corr", "cpu-small-corr-gc", _make_context_live),
+        ("cpu-small-corr", "cpu-small-corr-shift", _make_shift_first_live),
+        ("cpu-small-corr", "cpu-small-corr-shift", _make_shift_last_live),
     ],
 )
 def test_init_grows_as_the_identity(tmp_path, source, grown, make_live):
@@ -165,6 +175,11 @@ def test_grows_into_only_adds_identity_modules():
     assert grows_into(tiny, corr) and grows_into(tiny, dataclasses.replace(corr, corr_log_step=0.05))
     assert not grows_into(corr, dataclasses.replace(tiny, corr_groups=4))
     assert not grows_into(corr, dataclasses.replace(corr, corr_log_step=0.05))
+    # the shifted correlations likewise: switched on, never changed
+    shifted = dataclasses.replace(corr, corr_shift_px=2)
+    assert grows_into(corr, shifted) and grows_into(tiny, shifted)
+    assert not grows_into(shifted, dataclasses.replace(corr, corr_shift_px=3))
+    assert not grows_into(shifted, corr)
     assert not grows_into(tiny, dataclasses.replace(tiny, dec_extra_blocks=1, feat_channels=12))  # resized
 
 

@@ -6,7 +6,8 @@ import math
 import pytest
 import torch
 
-from bittc_core.model.correlation import CORR_OFFSETS, group_correlation, scale_correlation
+from bittc_core.model.config import ModelConfig
+from bittc_core.model.correlation import CORR_OFFSETS, group_correlation, scale_correlation, shifted_correlation
 from bittc_core.model.segnet import SegNet2D
 from bittc_core.model.warp import PaddedGrid, scale_warp
 
@@ -109,3 +110,66 @@ def test_outer_warps_tell_the_side_of_the_threshold():
     low, high = corr[:, :groups].mean(dim=(1, 2, 3)), corr[:, 2 * groups :].mean(dim=(1, 2, 3))
     assert low[0] > high[0]  # threshold above the truth: the lower warp is the true one
     assert high[1] > low[1]  # threshold below the truth: the upper warp is
+
+
+def _shifted(ref, warped, groups, max_shift, d):
+    """group_correlation of ref(x) with warped(x + d), zero beyond the map's sides."""
+    w = warped.shape[-1]
+    moved = torch.zeros_like(warped)
+    lo, hi = max(0, -d), min(w, w - d)
+    moved[..., lo:hi] = warped[..., lo + d : hi + d]
+    return group_correlation(ref, moved, groups)
+
+
+@pytest.mark.parametrize("layout", [torch.contiguous_format, torch.channels_last])
+def test_shifted_correlation_is_the_largest_over_the_shifts(layout):
+    """Each pixel and group: the maximum over d = -s ... s of the correlation with the map
+    moved by d columns; the same with and without autograd, in either layout."""
+    g = torch.Generator().manual_seed(5)
+    ref, warped = torch.randn(2, 6, 4, 9, generator=g), torch.randn(6, 6, 4, 9, generator=g)  # B=2, K=3
+    expected = torch.stack([_shifted(ref, warped, 3, 2, d) for d in range(-2, 3)]).amax(dim=0)
+    ref_l, warped_l = ref.contiguous(memory_format=layout), warped.contiguous(memory_format=layout)
+    with torch.no_grad():
+        out = shifted_correlation(ref_l, warped_l, 3, 2)
+    assert out.shape == (6, 3, 4, 9)
+    torch.testing.assert_close(out, expected)
+    warped_l.requires_grad_(True)
+    out = shifted_correlation(ref_l, warped_l, 3, 2)
+    torch.testing.assert_close(out, expected)
+    out.sum().backward()
+    assert warped_l.grad.abs().sum() > 0
+
+
+def test_shifted_correlation_finds_a_target_moved_sideways():
+    """ref is the source moved 2 columns: the plain correlation of the aligned warp is low,
+    the shifted one finds the move (up to s = 2) and misses it at s = 1."""
+    g = torch.Generator().manual_seed(6)
+    src = torch.randn(1, 8, 6, 20, generator=g)
+    ref = torch.zeros_like(src)
+    ref[..., 2:] = src[..., :-2]  # ref(x) = src(x - 2)
+    inner = (..., slice(4, 16))
+    plain = group_correlation(ref, src, 4)[inner].mean()
+    found = shifted_correlation(ref, src, 4, 2)[inner].mean()
+    short = shifted_correlation(ref, src, 4, 1)[inner].mean()
+    assert found > 0.8 and found > short + 0.3 and found > plain + 0.3
+
+
+def test_scale_correlation_appends_the_shifted_channels():
+    g = torch.Generator().manual_seed(7)
+    grid = PaddedGrid.for_features(8, 12, 1.5, 4)
+    ref, src = torch.randn(1, 8, 8, 12, generator=g), torch.randn(1, 8, 8, 12, generator=g)
+    eta = torch.tensor([[0.8, 1.0]])
+    warped = scale_warp(src, eta, grid)
+    plain = scale_correlation(ref, src, eta, warped, grid, 4, 0.05)
+    both = scale_correlation(ref, src, eta, warped, grid, 4, 0.05, max_shift=1)
+    assert both.shape == (2, 24, 8, 12)
+    torch.testing.assert_close(both[:, :12], plain)
+    middle = grid.crop(warped)
+    torch.testing.assert_close(both[:, 16:20], shifted_correlation(ref, middle, 4, 1))
+
+
+def test_shifted_correlation_needs_the_volume():
+    with pytest.raises(ValueError, match="corr_shift_px=2: needs the correlation volume"):
+        ModelConfig(corr_shift_px=2)
+    with pytest.raises(ValueError, match="corr_shift_px=-1: must be >= 0"):
+        ModelConfig(corr_groups=8, corr_shift_px=-1)

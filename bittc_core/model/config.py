@@ -30,7 +30,7 @@ GROWTH_FLAGS = ("global_context",)
 #: Growth switches: counts that may only be switched on (0 -> n) by growth: the
 #: correlation volume's convs start at zero, but its width depends on the count, so
 #: n -> m != n does not carry over. With the volume off, ``corr_log_step`` is free.
-GROWTH_SWITCHES = ("corr_groups",)
+GROWTH_SWITCHES = ("corr_groups", "corr_shift_px")
 
 
 @dataclass(frozen=True)
@@ -53,6 +53,9 @@ class ModelConfig:
     # (not in the paper, ``model.correlation``): 0 = off; its convs start at zero (growth)
     corr_groups: int = 0  # channel groups (divides feat_channels)
     corr_log_step: float = 0.03  # [log eta] offset of the two outer warps
+    # the volume's shifted correlations (``model.correlation.shifted_correlation``): the
+    # largest over sideways shifts up to this many feature px; 0 = off; convs start at zero
+    corr_shift_px: int = 0
     # SegRefineNet (guided by the reference image)
     guide_channels: int = 16
     refine_channels: int = 8
@@ -95,6 +98,10 @@ class ModelConfig:
             raise ValueError(
                 f"ModelConfig.corr_groups={self.corr_groups}: must divide feat_channels={self.feat_channels}"
             )
+        if self.corr_shift_px and not self.corr_groups:
+            raise ValueError(
+                f"ModelConfig.corr_shift_px={self.corr_shift_px}: needs the correlation volume (corr_groups > 0)"
+            )
         if not 0.0 < self.corr_log_step < math.inf:
             raise ValueError(f"ModelConfig.corr_log_step={self.corr_log_step}: must be > 0")
         if self.pad_factor < 1.0:
@@ -133,6 +140,10 @@ class ModelConfig:
 #: ``cpu-small-corr-gc``: ``cpu-small-corr`` plus the global-context block (an
 #: experiment: trained from a ``cpu-small-corr`` checkpoint with both added parts at a
 #: raised learning rate, ``--lr-mult``; README: one run, the block stayed unused).
+#: ``cpu-small-corr-shift``: ``cpu-small-corr`` plus the volume's shifted correlations
+#: (up to 2 feature px, 6 px of the input, either way along the rows), fed to SegNet's
+#: first and last convs by two more convs that start at zero, trained from a
+#: ``cpu-small-corr`` checkpoint: a road user crossing between the pair's frames.
 #: ``tiny``: unit tests only.
 _CPU_SMALL = ModelConfig(
     stem_channels=16,
@@ -158,6 +169,7 @@ CONFIGS: dict[str, ModelConfig] = {
     "cpu-medium": dataclasses.replace(_CPU_SMALL, feat_extra_blocks=3, dec_extra_blocks=1),
     "cpu-small-corr": dataclasses.replace(_CPU_SMALL, corr_groups=8),
     "cpu-small-corr-gc": dataclasses.replace(_CPU_SMALL, corr_groups=8, global_context=True),
+    "cpu-small-corr-shift": dataclasses.replace(_CPU_SMALL, corr_groups=8, corr_shift_px=2),
     "tiny": ModelConfig(
         stem_channels=8,
         feat_channels=8,

@@ -13,6 +13,13 @@ product f_ref * f_src):
 with o = (-1, 0, +1). Where the pixel's eta is eta_i, the middle one peaks; which of the
 outer ones is larger says on which side of the threshold eta lies. Shapes: reference
 (B, C, h, w), warps (B*K, C, ., .) batch-major -> (B*K, 3G, h, w) on the unpadded map.
+
+The scale warp aligns what moves along the camera's axis. A road user crossing the road
+also moves sideways between the two frames, and at the warp of its own eta it still lies
+d feature px to one side of where the reference has it. With ``max_shift`` s > 0 the
+volume gains 3G channels (``shifted_correlation``): for each warp, the largest of its
+group correlations with the warped source moved by d = -s ... s feature px along the
+rows, so a target that moved sideways by up to s feature px compares with itself.
 """
 
 from __future__ import annotations
@@ -20,6 +27,7 @@ from __future__ import annotations
 import math
 
 import torch
+import torch.nn.functional as F
 
 from bittc_core.model.warp import PaddedGrid, scale_warp
 
@@ -45,6 +53,35 @@ def group_correlation(ref: torch.Tensor, warped: torch.Tensor, groups: int) -> t
     return prod.mean(dim=3).view(b * k, groups, h, w)
 
 
+def shifted_correlation(ref: torch.Tensor, warped: torch.Tensor, groups: int, max_shift: int) -> torch.Tensor:
+    """ref (B, C, h, w), warped (B*K, C, h, w) -> (B*K, G, h, w): at each pixel x and group,
+    the largest group correlation of ref(x) with warped(x + d) over d = -s ... s feature px
+    along the row (s = ``max_shift``); beyond the map's sides the warped map is zero.
+
+    Computed on planar (NCHW) copies, one channel of each group at a time: a group's
+    channels are c = g n + j, so channel j of every group is the slice ``j::n``. Without
+    autograd the sums and the maximum go into two buffers in place (a third of the time)."""
+    b, c, h, w = ref.shape
+    n = c // groups
+    k = warped.shape[0] // b
+    padded = F.pad(warped.contiguous(), (max_shift, max_shift)).view(b, k, c, h, w + 2 * max_shift)
+    ref = ref.contiguous().view(b, 1, c, h, w)
+    refs = [ref[:, :, j::n] for j in range(n)]
+    srcs = [padded[:, :, j::n] for j in range(n)]
+    in_place = not torch.is_grad_enabled()
+    best = prod = None
+    for d in range(2 * max_shift + 1):
+        if in_place:
+            prod = torch.mul(srcs[0][..., d : d + w], refs[0], out=prod)
+            for j in range(1, n):
+                prod.addcmul_(srcs[j][..., d : d + w], refs[j])
+            best = prod.clone() if best is None else torch.maximum(best, prod, out=best)
+        else:
+            prod = sum(srcs[j][..., d : d + w] * refs[j] for j in range(n))
+            best = prod if best is None else torch.maximum(best, prod)
+    return (best / n).view(b * k, groups, h, w)
+
+
 def scale_correlation(
     ref: torch.Tensor,
     src: torch.Tensor,
@@ -53,20 +90,22 @@ def scale_correlation(
     grid: PaddedGrid,
     groups: int,
     log_step: float,
+    max_shift: int = 0,
 ) -> torch.Tensor:
     """Correlation volume of the three warps about each eta (B, K) -> (B*K, 3G, h, w), on
-    the unpadded map.
+    the unpadded map; with ``max_shift`` > 0, (B*K, 6G, h, w): the three warps' shifted
+    correlations follow.
 
     ``ref`` (B, C, h, w) are the unpadded reference features, ``warped`` is
     ``scale_warp(src, eta, grid)``, already computed for SegNet's input. The reference is
     zero in the padding, so is the correlation there: it is computed on the unpadded map
     only (the outer warps too) and never padded; SegNet places what its convs make of it
     (``SegNet2D.forward``)."""
-    parts = []
-    for offset in CORR_OFFSETS:
-        if offset == 0.0:
-            w = grid.crop(warped)
-        else:
-            w = scale_warp(src, eta * math.exp(offset * log_step), grid, unpadded=True)
-        parts.append(group_correlation(ref, w, groups))
+    warps = [
+        grid.crop(warped) if offset == 0.0 else scale_warp(src, eta * math.exp(offset * log_step), grid, unpadded=True)
+        for offset in CORR_OFFSETS
+    ]
+    parts = [group_correlation(ref, w, groups) for w in warps]
+    if max_shift:
+        parts += [shifted_correlation(ref, w, groups, max_shift) for w in warps]
     return torch.cat(parts, dim=1)

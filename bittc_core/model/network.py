@@ -81,6 +81,7 @@ class BinaryTTCNet(nn.Module):
             global_context=c.global_context,
             extra_blocks=c.dec_extra_blocks,
             corr_channels=len(CORR_OFFSETS) * c.corr_groups,
+            shift_channels=len(CORR_OFFSETS) * c.corr_groups if c.corr_shift_px else 0,
         )
         self.refine = SegRefineNet(
             guide_channels=c.guide_channels,
@@ -134,7 +135,14 @@ class BinaryTTCNet(nn.Module):
             corr = None
             if self.config.corr_groups:
                 corr = scale_correlation(
-                    ctx.terms.feat, feat_src, part, warped, ctx.grid, self.config.corr_groups, self.config.corr_log_step
+                    ctx.terms.feat,
+                    feat_src,
+                    part,
+                    warped,
+                    ctx.grid,
+                    self.config.corr_groups,
+                    self.config.corr_log_step,
+                    self.config.corr_shift_px,
                 )
             coarse = self._coarse(ctx, warped, slice(HEAD_TTC, HEAD_TTC + 1), corr)
             coarse = coarse.view(b, part.shape[1], *coarse.shape[-2:])

@@ -115,6 +115,7 @@ class SegNet2D(nn.Module):
         global_context: bool = False,
         extra_blocks: int = 0,
         corr_channels: int = 0,
+        shift_channels: int = 0,
     ) -> None:
         super().__init__()
         e, d = enc_channels, dec_channels
@@ -161,6 +162,15 @@ class SegNet2D(nn.Module):
             self.corr_last = conv(corr_channels, d[-1], kernel=1, bias=False)
             for layer in (self.corr_first, self.corr_last):
                 nn.init.zeros_(layer.weight)
+        # the volume's shifted correlations, the channels after ``corr_channels``: convs of
+        # their own, so that they can be added to a trained network (zero at init)
+        self.corr_channels = corr_channels
+        self.shift_first = self.shift_last = None
+        if shift_channels:
+            self.shift_first = conv(shift_channels, e[0], stride=2, bias=False)
+            self.shift_last = conv(shift_channels, d[-1], kernel=1, bias=False)
+            for layer in (self.shift_first, self.shift_last):
+                nn.init.zeros_(layer.weight)
 
     def prepare(self, ref_padded: torch.Tensor, grid: PaddedGrid) -> ReferenceTerms:
         """Once per reference frame: the reference parts of the split convs."""
@@ -169,25 +179,36 @@ class SegNet2D(nn.Module):
         return ReferenceTerms(first=self.first_ref(ref_padded), skip=skip, feat=feat)
 
     def _corr_first(self, corr: torch.Tensor, grid: PaddedGrid, size_hw: tuple[int, int]) -> torch.Tensor:
-        """``corr_first`` (3x3, stride 2, zero padding 1) of the zero-padded volume, from the
+        """``corr_first`` (and ``shift_first`` of the shifted channels) on the volume."""
+        out = self._padded_first(self.corr_first, corr[:, : self.corr_channels], grid, size_hw)
+        if self.shift_first is not None:
+            out = out + self._padded_first(self.shift_first, corr[:, self.corr_channels :], grid, size_hw)
+        return out
+
+    def _corr_last(self, corr: torch.Tensor, box: _MarginBox, size_hw: tuple[int, int]) -> torch.Tensor:
+        """``corr_last`` (1x1, no bias; ``shift_last`` of the shifted channels) of the
+        zero-padded volume cut to ``box``: the conv of the map, zero-padded into the box."""
+        out = self.corr_last(corr[:, : self.corr_channels])
+        if self.shift_last is not None:
+            out = out + self.shift_last(corr[:, self.corr_channels :])
+        return _pad_to(out, box.inner_top, box.inner_left, size_hw)
+
+    @staticmethod
+    def _padded_first(layer: nn.Module, corr: torch.Tensor, grid: PaddedGrid, size_hw: tuple[int, int]) -> torch.Tensor:
+        """``layer`` (3x3, stride 2, zero padding 1) of the zero-padded volume, from the
         unpadded one: the conv runs on the map with one zero row and column after it and,
         where the map starts at an odd padded row (column), one before it, so that its
         outputs fall on the padded grid's even rows (columns); every output it leaves out
         sees only zeros."""
         pt, pl = grid.top % 2, grid.left % 2
-        out = self.corr_first(F.pad(corr, (pl, 1, pt, 1)))
+        out = layer(F.pad(corr, (pl, 1, pt, 1)))
         return _pad_to(out, (grid.top - pt) // 2, (grid.left - pl) // 2, size_hw)
-
-    def _corr_last(self, corr: torch.Tensor, box: _MarginBox, size_hw: tuple[int, int]) -> torch.Tensor:
-        """``corr_last`` (1x1, no bias) of the zero-padded volume cut to ``box``: the conv of
-        the map, zero-padded into the box."""
-        return _pad_to(self.corr_last(corr), box.inner_top, box.inner_left, size_hw)
 
     def forward(
         self, ref: ReferenceTerms, warped: torch.Tensor, grid: PaddedGrid, corr: torch.Tensor | None = None
     ) -> torch.Tensor:
         """warped (B*K, C, hp, wp) -> logits (B*K, 3, h, w), cropped to the unpadded map.
-        ``corr`` (B*K, 3G, h, w): the correlation volume on the unpadded map, when the config
+        ``corr`` (B*K, 3G or 6G, h, w): the correlation volume on the unpadded map, when the config
         has one and the hypothesis is a scale (the binary-flow heads run without it). It
         is zero in the padding, so its convs (no bias) run on the map alone and their
         outputs are zero-padded into place (``_corr_first``, ``_corr_last``): their result on

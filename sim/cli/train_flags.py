@@ -18,7 +18,8 @@ def add_train_flags(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--config",
         required=True,
-        help="model config name (paper, cpu-small, cpu-small-gc, cpu-medium, cpu-small-corr, cpu-small-corr-gc, tiny)",
+        help="model config name (paper, cpu-small, cpu-small-gc, cpu-medium, cpu-small-corr, cpu-small-corr-gc, "
+        "cpu-small-corr-shift, tiny)",
     )
     p.add_argument("--out", required=True, help="best checkpoint path, *.pt")
     p.add_argument(
