@@ -127,8 +127,8 @@ def init_network(path: str | os.PathLike, config_name: str) -> BinaryTTCNet:
     """A network of config ``config_name`` starting from the weights of ``path``.
 
     The checkpoint's config must be that config, or one it grows from: the same sizes
-    with fewer growth blocks, without the global-context block or without the correlation
-    volume (``GROWTH_COUNTS``, ``GROWTH_FLAGS``, ``GROWTH_SWITCHES`` in
+    with fewer growth blocks, without the global-context block, the correlation volume or
+    its shifted correlations (``GROWTH_COUNTS``, ``GROWTH_FLAGS``, ``GROWTH_SWITCHES`` in
     ``bittc_core.model.config``). The added modules keep their
     initialisation, the identity, so the network computes what the checkpoint did.
     """
@@ -141,8 +141,8 @@ def init_network(path: str | os.PathLike, config_name: str) -> BinaryTTCNet:
         raise CheckpointError(
             f"initial checkpoint {str(path)!r}: its config ({name!r}) is neither "
             f"{config_name!r} nor a config {config_name!r} grows from "
-            "(the same sizes with fewer growth blocks, no global-context block or no "
-            "correlation volume)"
+            "(the same sizes with fewer growth blocks, no global-context block, no "
+            "correlation volume or no shifted correlations)"
         )
     net = BinaryTTCNet(target)
     added = set(net.state_dict()) - set(BinaryTTCNet(source).state_dict())

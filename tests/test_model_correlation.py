@@ -133,11 +133,16 @@ def test_shifted_correlation_is_the_largest_over_the_shifts(layout):
         out = shifted_correlation(ref_l, warped_l, 3, 2)
     assert out.shape == (6, 3, 4, 9)
     torch.testing.assert_close(out, expected)
+    assert out.is_contiguous(memory_format=layout)
+    # with autograd: the same values, and the gradient of the reference computation
+    weights = torch.randn(expected.shape, generator=g)
+    warped_g = warped.clone().requires_grad_(True)
+    (torch.stack([_shifted(ref, warped_g, 3, 2, d) for d in range(-2, 3)]).amax(dim=0) * weights).sum().backward()
     warped_l.requires_grad_(True)
     out = shifted_correlation(ref_l, warped_l, 3, 2)
     torch.testing.assert_close(out, expected)
-    out.sum().backward()
-    assert warped_l.grad.abs().sum() > 0
+    (out * weights).sum().backward()
+    torch.testing.assert_close(warped_l.grad, warped_g.grad)
 
 
 def test_shifted_correlation_finds_a_target_moved_sideways():
@@ -166,6 +171,11 @@ def test_scale_correlation_appends_the_shifted_channels():
     torch.testing.assert_close(both[:, :12], plain)
     middle = grid.crop(warped)
     torch.testing.assert_close(both[:, 16:20], shifted_correlation(ref, middle, 4, 1))
+
+
+def test_shifted_correlation_needs_whole_groups():
+    with pytest.raises(ValueError, match="6 channels do not split into 4 groups"):
+        shifted_correlation(torch.zeros(1, 6, 2, 3), torch.zeros(2, 6, 2, 3), 4, 1)
 
 
 def test_shifted_correlation_needs_the_volume():

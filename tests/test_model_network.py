@@ -114,26 +114,40 @@ def test_registered_config_sizes():
         gc = count_parameters(BinaryTTCNet(CONFIGS["cpu-small-gc"]))
         medium = count_parameters(BinaryTTCNet(CONFIGS["cpu-medium"]))
         corr = count_parameters(BinaryTTCNet(CONFIGS["cpu-small-corr"]))
+        shift = count_parameters(BinaryTTCNet(CONFIGS["cpu-small-corr-shift"]))
         tiny = count_parameters(BinaryTTCNet(CONFIGS["tiny"]))
     assert 88e6 < paper < 94e6  # "about 91 M"
     assert tiny < small < gc < 2e6  # cpu-small-gc = cpu-small + the global-context block
     assert small < medium < 2e6  # cpu-medium = cpu-small + growth blocks
     assert corr - small == 3 * 8 * 16 * (9 + 1)  # cpu-small-corr: 3 warps x 8 groups into 16-ch 3x3 and 1x1 convs
+    assert shift - corr == 3 * 8 * 16 * (9 + 1)  # the shifted correlations: as many again, their own convs
     assert CONFIGS["paper"].norm == "none" and CONFIGS["cpu-small"].norm != "none"
 
 
-@pytest.mark.parametrize("field", ["feat_extra_blocks", "dec_extra_blocks", "refine_extra_blocks", "corr_groups"])
-def test_growth_blocks_start_as_the_identity(field):
-    """A config with added growth blocks (or the correlation volume), loaded with the
-    smaller config's weights,
-    computes the same geofences and continuous output. In train mode too, except for
-    decoder blocks: the finest level then runs on a wider crop, so its batch norm
-    takes its statistics over more pixels."""
+@pytest.mark.parametrize(
+    "field, base",
+    [
+        ("feat_extra_blocks", {}),
+        ("dec_extra_blocks", {}),
+        ("refine_extra_blocks", {}),
+        ("corr_groups", {}),
+        ("corr_shift_px", {"corr_groups": 2}),
+    ],
+)
+def test_growth_blocks_start_as_the_identity(field, base):
+    """A config with added growth blocks (or the correlation volume, or its shifted
+    correlations), loaded with the smaller config's weights, computes the same geofences
+    and continuous output. In train mode too, except for decoder blocks: the finest level
+    then runs on a wider crop, so its batch norm takes its statistics over more pixels."""
     torch.manual_seed(0)
-    small = BinaryTTCNet(CONFIGS["tiny"])
-    grown = BinaryTTCNet(dataclasses.replace(CONFIGS["tiny"], **{field: 2}))
+    small = BinaryTTCNet(dataclasses.replace(CONFIGS["tiny"], **base))
+    grown = BinaryTTCNet(dataclasses.replace(CONFIGS["tiny"], **base, **{field: 2}))
+    if base:  # a trained volume: live, so the grown network must keep what it adds
+        with torch.no_grad():
+            small.segnet.corr_first.weight.normal_(0.0, 0.3)
     missing, unexpected = grown.load_state_dict(small.state_dict(), strict=False)
-    assert missing and not unexpected and all(".extra" in k or "dec_extra" in k or ".corr_" in k for k in missing)
+    added = (".extra", "dec_extra", ".corr_", ".shift_")
+    assert missing and not unexpected and all(any(a in k for a in added) for k in missing)
     prev, latest = torch.rand(2, 3, 48, 96), torch.rand(2, 3, 48, 96)
     eta = torch.tensor([[0.8, 1.0], [0.9, 1.1]])
     for train in (False,) if field == "dec_extra_blocks" else (True, False):

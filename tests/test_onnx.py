@@ -31,10 +31,15 @@ HALF = (24, 24)  # (H, W) of a view half as wide (as the fovea beside the wide v
 pytestmark = pytest.mark.slow
 
 
-def _tiny_checkpoint(path, seed: int = 0):
+def _tiny_checkpoint(path, seed: int = 0, shift_px: int = 0):
     torch.manual_seed(seed)
-    cfg = dataclasses.replace(get_config("tiny"), corr_groups=4)  # the correlation volume too
+    # the correlation volume too (and its shifted correlations with ``shift_px``)
+    cfg = dataclasses.replace(get_config("tiny"), corr_groups=4, corr_shift_px=shift_px)
     net = BinaryTTCNet(cfg).eval()
+    if shift_px:  # the shifted correlations' convs start at zero: make them count
+        with torch.no_grad():
+            net.segnet.shift_first.weight.normal_(0.0, 0.3)
+            net.segnet.shift_last.weight.normal_(0.0, 0.3)
     save_checkpoint(path, make_payload(net, "tiny", {"frame_dt_s": cfg.frame_dt_s}))
     return path
 
@@ -76,6 +81,17 @@ def test_tiny_round_trip_matches_torch(tiny_export):
         np.testing.assert_allclose(ort.geofence(a, b, thr), ref.geofence(a, b, thr), atol=2e-5)
         np.testing.assert_allclose(np.log(ort.motion_in_depth(a, b)), np.log(ref.motion_in_depth(a, b)), atol=1e-4)
     assert ort.feature_computations == 6  # the streaming cache: each frame extracted once
+
+
+def test_shifted_correlations_export(tmp_path):
+    """A network with the volume's shifted correlations exports and matches torch."""
+    ckpt = _tiny_checkpoint(tmp_path / "shift.pt", seed=1, shift_px=1)
+    export_onnx(ckpt, tmp_path / "onnx", sizes=[SIZE])
+    ref = make_estimator("bittc", weights=str(ckpt), device="cpu")
+    ort = make_estimator("bittc", weights=str(ckpt), backend="onnxruntime", onnx=str(tmp_path / "onnx"))
+    a, b = _zoom_pair(*SIZE, 2)
+    thr = [0.5, 1.0, 2.0]
+    np.testing.assert_allclose(ort.geofence(a, b, thr), ref.geofence(a, b, thr), atol=2e-5)
 
 
 def test_each_size_runs_its_own_graphs_and_forks_share_them(tiny_export):

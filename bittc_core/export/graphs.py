@@ -75,7 +75,9 @@ class _Graph(nn.Module):
         warped = scale_warp(feat_prev, eta, grid)
         corr = None
         if cfg.corr_groups:
-            corr = scale_correlation(terms.feat, feat_prev, eta, warped, grid, cfg.corr_groups, cfg.corr_log_step)
+            corr = scale_correlation(
+                terms.feat, feat_prev, eta, warped, grid, cfg.corr_groups, cfg.corr_log_step, cfg.corr_shift_px
+            )
         coarse = net.segnet(terms, warped, grid, corr)[:, HEAD_TTC : HEAD_TTC + 1]
         coarse = F.interpolate(coarse, size=self.size, mode="bilinear", align_corners=False)
         return net.refine(guide, coarse).view(v, k, *self.size)

@@ -29,7 +29,9 @@ GROWTH_COUNTS = ("feat_extra_blocks", "dec_extra_blocks", "refine_extra_blocks")
 GROWTH_FLAGS = ("global_context",)
 #: Growth switches: counts that may only be switched on (0 -> n) by growth: the
 #: correlation volume's convs start at zero, but its width depends on the count, so
-#: n -> m != n does not carry over. With the volume off, ``corr_log_step`` is free.
+#: n -> m != n does not carry over; the shifted correlations' width does not depend on
+#: their range, but trained convs would read another range's channels as theirs. With
+#: the volume off, ``corr_log_step`` is free.
 GROWTH_SWITCHES = ("corr_groups", "corr_shift_px")
 
 

@@ -60,9 +60,13 @@ def shifted_correlation(ref: torch.Tensor, warped: torch.Tensor, groups: int, ma
 
     Computed on planar (NCHW) copies, one channel of each group at a time: a group's
     channels are c = g n + j, so channel j of every group is the slice ``j::n``. Without
-    autograd the sums and the maximum go into two buffers in place (a third of the time)."""
+    autograd the sums and the maximum go into two buffers in place. The output has the
+    warped map's layout (channels-last in, channels-last out)."""
     b, c, h, w = ref.shape
+    if c % groups:
+        raise ValueError(f"shifted_correlation: {c} channels do not split into {groups} groups")
     n = c // groups
+    channels_last = c > 1 and warped.stride(1) == 1
     k = warped.shape[0] // b
     padded = F.pad(warped.contiguous(), (max_shift, max_shift)).view(b, k, c, h, w + 2 * max_shift)
     ref = ref.contiguous().view(b, 1, c, h, w)
@@ -79,7 +83,8 @@ def shifted_correlation(ref: torch.Tensor, warped: torch.Tensor, groups: int, ma
         else:
             prod = sum(srcs[j][..., d : d + w] * refs[j] for j in range(n))
             best = prod if best is None else torch.maximum(best, prod)
-    return (best / n).view(b * k, groups, h, w)
+    best = (best / n).view(b * k, groups, h, w)
+    return best.contiguous(memory_format=torch.channels_last) if channels_last else best
 
 
 def scale_correlation(

@@ -1,0 +1,55 @@
+"""What the correlation volume's shifted correlations cost a job (``cpu-small-corr-shift``).
+
+Usage: python bench/bench_corr_shift.py [--calls N] [--threads T]
+Times the streaming geofence call (one new frame extracted, the reference context, K = 4
+thresholds against the cached previous frame) of the wide view (96x288) for the shipped
+weights and for the same weights grown into ``cpu-small-corr-shift`` (its added convs
+start at zero; what a job costs does not depend on their weights), in interleaved rounds.
+Prints the medians [ms] and their ratio; nothing is asserted.
+"""
+
+from __future__ import annotations
+
+import argparse
+import tempfile
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from bittc_core.benchmark import interleaved_median_ms
+from bittc_core.checkpoint import DEFAULT_WEIGHTS, init_network, load_checkpoint, make_payload, save_checkpoint
+from bittc_core.estimator import make_estimator
+from controllers.geofence import default_thresholds
+
+SHIFT_CONFIG = "cpu-small-corr-shift"
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--calls", type=int, default=100)
+    ap.add_argument("--threads", type=int, default=2)
+    args = ap.parse_args()
+    torch.set_num_threads(args.threads)
+    thr = default_thresholds(4)
+    rng = np.random.default_rng(0)
+    frames = [rng.integers(0, 256, (96, 288, 3), dtype=np.uint8) for _ in range(args.calls + 6)]
+    with tempfile.TemporaryDirectory() as tmp:
+        grown = Path(tmp) / "grown.pt"
+        meta = load_checkpoint(DEFAULT_WEIGHTS)["train_meta"]
+        save_checkpoint(grown, make_payload(init_network(DEFAULT_WEIGHTS, SHIFT_CONFIG), SHIFT_CONFIG, meta))
+        ests = {
+            "cpu-small-corr (shipped)": make_estimator("bittc", device="cpu"),
+            SHIFT_CONFIG: make_estimator("bittc", weights=str(grown), device="cpu"),
+        }
+        calls = {name: (lambda a, b, est=est: est.geofence(a, b, thr)) for name, est in ests.items()}
+        ms = interleaved_median_ms(calls, frames, warmup=5)
+    print(f"streaming K = 4 wide-view geofence calls (96x288), {args.threads} threads, {args.calls} interleaved rounds")
+    for name, t in ms.items():
+        print(f"{name:>26}: {t:6.2f} ms")
+    base, shifted = ms["cpu-small-corr (shipped)"], ms[SHIFT_CONFIG]
+    print(f"{'ratio':>26}: {shifted / base:6.3f} (+{shifted - base:.2f} ms)")
+
+
+if __name__ == "__main__":
+    main()
