@@ -103,6 +103,19 @@ class GlobalContext(nn.Module):
         return x + self.expand(g)
 
 
+def _zero_start_convs(channels: int, first_out: int, last_out: int) -> tuple[nn.Module | None, nn.Module | None]:
+    """A 3x3 stride-2 conv (into the first encoder conv) and a 1x1 conv (into the finest
+    decoder conv) of ``channels`` input channels, without bias and zero at init, so that
+    adding them leaves a trained network unchanged; (None, None) for no channels."""
+    if not channels:
+        return None, None
+    first = conv(channels, first_out, stride=2, bias=False)
+    last = conv(channels, last_out, kernel=1, bias=False)
+    for layer in (first, last):
+        nn.init.zeros_(layer.weight)
+    return first, last
+
+
 class SegNet2D(nn.Module):
     def __init__(
         self,
@@ -156,21 +169,11 @@ class SegNet2D(nn.Module):
         # correlation volume (``model.correlation``): a 3x3 stride-2 conv of it added to
         # the first encoder conv, a 1x1 conv to the finest decoder conv; both zero at init,
         # so a trained network is unchanged
-        self.corr_first = self.corr_last = None
-        if corr_channels:
-            self.corr_first = conv(corr_channels, e[0], stride=2, bias=False)
-            self.corr_last = conv(corr_channels, d[-1], kernel=1, bias=False)
-            for layer in (self.corr_first, self.corr_last):
-                nn.init.zeros_(layer.weight)
+        self.corr_first, self.corr_last = _zero_start_convs(corr_channels, e[0], d[-1])
         # the volume's shifted correlations, the channels after ``corr_channels``: convs of
         # their own, so that they can be added to a trained network (zero at init)
         self.corr_channels = corr_channels
-        self.shift_first = self.shift_last = None
-        if shift_channels:
-            self.shift_first = conv(shift_channels, e[0], stride=2, bias=False)
-            self.shift_last = conv(shift_channels, d[-1], kernel=1, bias=False)
-            for layer in (self.shift_first, self.shift_last):
-                nn.init.zeros_(layer.weight)
+        self.shift_first, self.shift_last = _zero_start_convs(shift_channels, e[0], d[-1])
 
     def prepare(self, ref_padded: torch.Tensor, grid: PaddedGrid) -> ReferenceTerms:
         """Once per reference frame: the reference parts of the split convs."""
