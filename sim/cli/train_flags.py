@@ -7,6 +7,7 @@ import math
 from pathlib import Path
 
 from bittc_core.errors import CliError
+from bittc_core.model.config import CONFIGS
 from sim.cli.common import add_device_flag, add_seed_flag, check_device, check_seed
 
 STAGE_CHOICES = ("flow", "binary", "continuous", "all")
@@ -18,8 +19,7 @@ def add_train_flags(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--config",
         required=True,
-        help="model config name (paper, cpu-small, cpu-small-gc, cpu-medium, cpu-small-corr, cpu-small-corr-gc, "
-        "cpu-small-corr-shift, tiny)",
+        help=f"model config name ({', '.join(CONFIGS)})",
     )
     p.add_argument("--out", required=True, help="best checkpoint path, *.pt")
     p.add_argument(
