@@ -214,6 +214,20 @@ def fenced_blobs(
     return out
 
 
+def _predicted_regions(mask, cal: Calibration, cfg, speed_mps: float, largest_s: float, min_height_m: float):
+    """(pixels of the largest, (H, W) bool mask of them all) of the regions of ``mask``
+    (predicted into the path) that span ``min_height_m`` and the area of a face at the
+    static depth of the largest fence ``largest_s`` [s], wherever they stand: a car that
+    the tracker predicts across a turning ego's path may float above the counted rows
+    (its road shows beneath it); no region: (0, empty)."""
+    depth = static_depth_m(cal, speed_mps, largest_s)
+    rows = cal.fy_px * min_height_m / depth if depth > 1e-6 else 0.0
+    area, found = standing_regions(mask, 0, 0, rows)
+    if area < need_px(cal, depth, cfg.min_region_px, cfg.min_face_m2):
+        return 0, np.zeros_like(mask)
+    return area, found
+
+
 def in_path_evidence(
     maps: np.ndarray,
     thr: np.ndarray,
@@ -231,7 +245,9 @@ def in_path_evidence(
     and the ``controllers.geofence_config.GeofenceConfig`` ``cfg`` -> (in-path region size
     per fence [px], counted mask, corridor mask). A region counts in the corridor at the
     fence's static depth (not without ``static``) or where the tracker predicts it into
-    the path, standing on the road, ``min_height_m`` tall there and big enough."""
+    the path, standing on the road, ``min_height_m`` tall there and big enough (with
+    ``cfg.tracker.turn_across``, wherever it stands, if as tall and as big as the largest
+    fence asks: ``_predicted_regions``)."""
     c = cfg
     curvature = yaw_rate_radps / speed_mps if speed_mps > c.min_speed_mps else 0.0
     half_w = cal.ego_width_m / 2 + c.corridor_margin_m
@@ -248,7 +264,11 @@ def in_path_evidence(
         rows = cal.fy_px * min_height_m / depth if depth > 1e-6 else 0.0
         area, standing = standing_regions(inside & region & static, lowest, c.contact_px, rows)
         need = need_px(cal, depth, c.min_region_px, c.min_face_m2)
-        area_p, ahead = standing_regions(predicted & inside & bands[i], lowest, c.contact_px, rows)
+        if c.tracker.turn_across:
+            area_p, ahead = _predicted_regions(predicted & inside & bands[i], cal, c, speed_mps, thr[-1], min_height_m)
+            area_p = max(area_p, need) if area_p else 0
+        else:
+            area_p, ahead = standing_regions(predicted & inside & bands[i], lowest, c.contact_px, rows)
         if area_p > area:
             area, standing = area_p, ahead
         if area >= need:

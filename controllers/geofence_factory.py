@@ -7,10 +7,15 @@ from __future__ import annotations
 
 from controllers.geofence import GeofenceController
 from controllers.geofence_config import GeofenceConfig, default_thresholds
+from controllers.tracker_config import TrackerConfig
 
 
 def _config(
-    thresholds_s, frame_stride: int | None, fovea_fences_from_s: float | None = None, road_edge_rows: int | None = None
+    thresholds_s,
+    frame_stride: int | None,
+    fovea_fences_from_s: float | None = None,
+    road_edge_rows: int | None = None,
+    turn_across: bool | None = None,
 ) -> GeofenceConfig:
     thr = tuple(thresholds_s) if thresholds_s is not None else default_thresholds(4)
     kw = {} if frame_stride is None else {"frame_stride": frame_stride}
@@ -18,6 +23,8 @@ def _config(
         kw["fovea_fences_from_s"] = float(fovea_fences_from_s)
     if road_edge_rows is not None:
         kw["road_edge_rows"] = road_edge_rows
+    if turn_across is not None:
+        kw["tracker"] = TrackerConfig(turn_across=bool(turn_across))
     return GeofenceConfig(thresholds_s=thr, **kw)
 
 
@@ -31,6 +38,7 @@ def make_geofence(
     onnx: str | None = None,
     fovea_fences_from_s: float | None = None,
     road_edge_rows: int | None = None,
+    turn_across: bool | None = None,
 ) -> GeofenceController:
     """The shipped network (or ``weights``) behind the geofence controller; ``backend=
     "onnxruntime", onnx=DIR``: the same weights exported to ``DIR`` (checked against them)."""
@@ -41,7 +49,8 @@ def make_geofence(
         est = make_estimator("bittc", weights=weights or DEFAULT_WEIGHTS, backend=backend, onnx=onnx)
     else:
         est = make_estimator("bittc", weights=weights, device=device, backend=backend, onnx=onnx)
-    return GeofenceController(est, _config(thresholds_s, frame_stride, fovea_fences_from_s, road_edge_rows), name=name)
+    cfg = _config(thresholds_s, frame_stride, fovea_fences_from_s, road_edge_rows, turn_across)
+    return GeofenceController(est, cfg, name=name)
 
 
 def make_flow(
@@ -50,11 +59,12 @@ def make_flow(
     name: str = "flow",
     fovea_fences_from_s: float | None = None,
     road_edge_rows: int | None = None,
+    turn_across: bool | None = None,
 ) -> GeofenceController:
     """The DIS + affine-expansion baseline behind the same controller logic."""
     from bittc_core.estimator import make_estimator
 
-    cfg = _config(thresholds_s, frame_stride, fovea_fences_from_s, road_edge_rows)
+    cfg = _config(thresholds_s, frame_stride, fovea_fences_from_s, road_edge_rows, turn_across)
     return GeofenceController(make_estimator("flow"), cfg, name=name)
 
 
@@ -64,9 +74,10 @@ def make_geofence_exact(
     name: str = "geofence-exact",
     fovea_fences_from_s=None,
     road_edge_rows: int | None = None,
+    turn_across: bool | None = None,
 ) -> GeofenceController:
     """The same policy on the exact fences of the per-pixel ground truth (not deployable)."""
     from controllers.geofence_exact import ExactFenceController
 
-    cfg = _config(thresholds_s, frame_stride, fovea_fences_from_s, road_edge_rows)
+    cfg = _config(thresholds_s, frame_stride, fovea_fences_from_s, road_edge_rows, turn_across)
     return ExactFenceController(cfg, name=name)

@@ -90,7 +90,10 @@ class PathPrediction:
     def observe(self, view: str, maps: np.ndarray, thr: np.ndarray, bands: list, speed_mps: float, t_s: float):
         """Extract the regions of ``view`` (sorted (K, H, W) maps of fences ``thr`` [s],
         ``bands``: each fence's counted pixels, None where the view's pair turned too far)
-        and associate them with its tracks."""
+        and associate them with its tracks. A region stands on the road where its bottom
+        reaches a fence's lowest counted rows, or, with ``TrackerConfig.turn_across``,
+        anywhere the ground under it shows (it floats then: an oncoming car whose road
+        lies outside the fences beneath it)."""
         if view not in self.views:
             return
         if bands is None or not any(b.any() for b in bands):  # nothing to judge: the tracks age
@@ -110,6 +113,9 @@ class PathPrediction:
             lowest = bottom_row(bands[i])
             rows = slice(max(lowest - c.contact_px, 0), lowest + 1)
             touch[rows] |= bands[i][rows]
+        standing = touch
+        if t.turn_across:  # a region stands wherever the ground under it shows
+            touch = inside
         depths = np.array([max(static_depth_m(cal, speed_mps, tau), 1e-6) for tau in thr])
         pad = np.ceil(cal.fx_px * t.contact_pad_m / depths)
         found = fenced_blobs(inside, touch, maps, thr, c.prob_inside, need, self.ground_depth[view], t.join_rows, pad)
@@ -117,6 +123,8 @@ class PathPrediction:
         if t.edge_from_largest:
             blobs = [self._largest_fence_edge(b, parts, cal) for b in blobs]
         tracks = self.trackers[view].update(t_s, self.pose, speed_mps, blobs)
+        for blob, track in zip(blobs, tracks):
+            track.floating = not (blob.mask & standing).any()
         self._seen[view] = list(zip(blobs, tracks))
 
     def predicted(self, view: str, shape: tuple[int, int], t_s: float, speed_mps: float, yaw_rate: float):
@@ -180,11 +188,14 @@ class PathPrediction:
 
     def _upright(self, blob: Blob, cal: Calibration, speed_mps: float) -> bool:
         """Whether a fenced region stands up like a road user, not flat on the ground: it
-        spans ``TrackerConfig.min_height_m`` at the static depth of its fence, and its inner
+        spans ``TrackerConfig.min_height_m`` at the static depth of its fence (with
+        ``turn_across``, at the ground's depth under it where that is further), and its inner
         edge does not slant outwards like a strip of ground along the road."""
         t = self.cfg.tracker
         rows = np.flatnonzero(blob.mask.any(axis=1))
         depth = max(static_depth_m(cal, speed_mps, blob.tau_bound_s), 1e-6)
+        if t.turn_across and blob.contact_depth_m:  # the ground under it lies further
+            depth = max(depth, blob.contact_depth_m)
         if rows[-1] - rows[0] + 1 < cal.fy_px * t.min_height_m / depth:
             return False
         if blob.u_left <= cal.cx_px <= blob.u_right:  # across the centre: the corridor rule judges it

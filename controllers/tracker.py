@@ -48,6 +48,16 @@ Per job and view:
    pixels of its rider, swings the fitted crossing point by metres from job to job, and
    the fence needs consecutive jobs to fire.
 
+With ``turn_across`` (a turn across an oncoming car's path, decided on the yaw rate
+alone): association compares columns with the ego's rotation since a track's last region
+taken out (a turning ego sweeps the world sideways by fx per radian); a track whose region
+comes to lie across the image centre keeps the side it came from, and its leading edge
+(the right one for a track from the left) stands in for its inner edge in steps 3 and 4;
+a track whose region floats (``Track.floating``: it stands on the ground where that
+shows, not at a fence's lowest counted rows) predicts only when it comes towards the ego
+at ``float_closing_mps`` or faster along the ego's heading, and then moves along that
+heading only (oncoming traffic keeps its lane).
+
 The regions, and the fovea's check of the wide view's bearing test:
 ``controllers.path_prediction``.
 
@@ -80,9 +90,13 @@ class _Obs:
     pose: tuple[float, float, float]  # odometry (x, y, psi) at t
     inner_px: float | None = None  # [px] its inner edge where read apart from its extent
 
-    def inner_bearing(self, cal: Calibration) -> float:
-        """x / z of the region's inner edge (its column nearest the image centre)."""
-        if self.inner_px is not None:
+    def inner_bearing(self, cal: Calibration, from_left: bool | None = None) -> float:
+        """x / z of the region's inner edge (its column nearest the image centre; across
+        the centre, with ``from_left`` known, its leading edge: the right one for a track
+        that came from the left)."""
+        if from_left is not None and self.u_left <= cal.cx_px <= self.u_right:
+            inner = self.u_right if from_left else self.u_left
+        elif self.inner_px is not None:
             inner = self.inner_px
         else:
             inner = self.u_right if self.u_right < cal.cx_px else self.u_left
@@ -95,6 +109,7 @@ class Track:
     missed: int = 0
     refuted: bool = False  # a finer view found its bearing moving out: it predicts no more
     held: int = 0  # [jobs] left in which it counts as predicted though its prediction fails
+    floating: bool = False  # its latest region does not reach a fence's lowest counted rows
 
     @property
     def centre_px(self) -> float:
@@ -103,6 +118,16 @@ class Track:
     @property
     def width_px(self) -> float:
         return self.obs[-1].u_right - self.obs[-1].u_left + 1
+
+    def side(self, cal: Calibration, keep: bool) -> bool | None:
+        """With ``keep``, the side of the image centre it came from (True: the left), read
+        on its earliest region in the window not across the centre; None without ``keep``
+        or when every region lies across the centre."""
+        if keep:
+            for o in self.obs:
+                if not o.u_left <= cal.cx_px <= o.u_right:
+                    return o.u_right < cal.cx_px
+        return None
 
     def contact_time_s(self) -> float:
         """t0 [s]: the earliest time by which the track reaches the camera plane."""
@@ -131,7 +156,9 @@ class BlobTracker:
             best, best_d = None, math.inf
             for i in free:
                 tr = self.tracks[i]
-                d = abs(tr.centre_px - centre)
+                # turning left (psi up) moves the world right in the image
+                turned_px = self.cal.fx_px * (pose[2] - tr.obs[-1].pose[2]) if c.turn_across else 0.0
+                d = abs(tr.centre_px + turned_px - centre)
                 if d <= max(c.gate_frac * max(width, tr.width_px), c.min_gate_px) and d < best_d:
                     best, best_d = i, d
             if best is None:
@@ -158,12 +185,13 @@ class BlobTracker:
         cal, c = self.cal, self.cfg
         cos_p = math.cos(math.radians(cal.pitch_deg))
         ts, pts = [], []
+        side = tr.side(cal, c.turn_across)
         for o in tr.obs:
             cut = o.u_left <= 0 or o.u_right >= cal.width_px - 1
-            if o.u_left <= cal.cx_px <= o.u_right or (cut and not (c.cut_regions or c.extent)):
+            if (side is None and o.u_left <= cal.cx_px <= o.u_right) or (cut and not (c.cut_regions or c.extent)):
                 return None
             z = max(o.speed_mps * cos_p * max(t0 - o.t_s, c.min_ttc_s), o.contact_depth_m or 0.0, 0.5)
-            fwd, left = z + cal.mount_forward_m, -o.inner_bearing(cal) * z
+            fwd, left = z + cal.mount_forward_m, -o.inner_bearing(cal, side) * z
             x, y, psi = o.pose
             pts.append((x + fwd * math.cos(psi) - left * math.sin(psi), y + fwd * math.sin(psi) + left * math.cos(psi)))
             ts.append(o.t_s)
@@ -189,10 +217,12 @@ class BlobTracker:
         cal, c = self.cal, self.cfg
         ts, dist = [], []
         psi0 = tr.obs[0].pose[2]
+        side = tr.side(cal, c.turn_across)
         for o in tr.obs:
-            bearing = o.inner_bearing(cal) - (o.pose[2] - psi0)  # turning left moves the world right
+            bearing = o.inner_bearing(cal, side) - (o.pose[2] - psi0)  # turning left moves the world right
             ts.append(o.t_s)
-            dist.append(abs(bearing))
+            # the distance from the centre, on the side it came from (negative past it)
+            dist.append(abs(bearing) if side is None else (-bearing if side else bearing))
         ts = np.asarray(ts) - ts[0]
         if np.ptp(ts) <= 0:
             return False
@@ -229,6 +259,12 @@ class BlobTracker:
         vel = coef[1]
         if not c.min_speed_mps <= float(np.hypot(*vel)) <= c.max_speed_mps:
             return False
+        if c.turn_across and tr.floating:  # oncoming, keeping its lane, or nothing
+            heading0 = np.array([math.cos(pose[2]), math.sin(pose[2])])
+            along = float(vel @ heading0)
+            if along > -c.float_closing_mps:
+                return False
+            vel = along * heading0
         horizon = max(t0 - t_s, 0.0) + c.horizon_pad_s
         times = np.arange(0.0, horizon + 1e-9, c.step_s)
         target = coef[0] + np.outer(times + (t_s - tm), vel)  # (N, 2)
@@ -247,7 +283,8 @@ class BlobTracker:
         reach_w = cal.ego_width_m / 2 + c.margin_m
         # the target spans from its inner edge outwards, away from the image centre, by its
         # extent (ego frame: left of the centre is + left)
-        outwards = 1.0 if tr.obs[-1].u_right < cal.cx_px else -1.0
+        side = tr.side(cal, c.turn_across)
+        outwards = (1.0 if tr.obs[-1].u_right < cal.cx_px else -1.0) if side is None else (1.0 if side else -1.0)
         far = left + outwards * extent_m  # +-inf where the image's side cuts it
         lo, hi = np.minimum(left, far), np.maximum(left, far)
         return bool(np.any((np.abs(fwd) <= reach_l) & (lo <= reach_w) & (hi >= -reach_w)))

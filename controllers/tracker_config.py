@@ -74,6 +74,21 @@ class TrackerConfig:
     # such a camera's tracker predicts nothing, since the wide view alone reads a parked
     # truck's far corner as a collision course (benign-parked-truck at K = 4)
     predict_unchecked: bool = False
+    # the rules that let a turn across an oncoming car's path brake on the yaw rate alone
+    # (docs/vru.md, "A turn across the path"): a region stands where the ground under it
+    # shows, not only at a fence's lowest counted rows; a track keeps the side it came from
+    # when its region crosses the image centre; a region's height is judged at that
+    # ground's depth where it lies beyond the fence's static depth; association takes the
+    # ego's rotation out; a predicted region counts without reaching the lowest counted
+    # rows if it is as tall and as big as the largest fence asks. Off: the straight-road
+    # tracker of earlier releases
+    turn_across: bool = True
+    # [m/s] with ``turn_across``, a region that does not reach a fence's lowest counted
+    # rows (it floats: an oncoming car whose road shows beneath it) predicts only when it
+    # comes towards the ego at least this fast along the ego's heading, and then along
+    # that heading only (oncoming traffic keeps its lane): a fenced fragment beside the
+    # road, placed at the ground's depth, would otherwise fit a fast sideways motion
+    float_closing_mps: float = 2.0
 
     def __post_init__(self) -> None:
         ok = (
@@ -95,6 +110,7 @@ class TrackerConfig:
             and self.hold_jobs >= 0
             and self.road_user_width_m >= 0
             and self.check_tol_px >= 0
+            and self.float_closing_mps >= 0
         )
         if not ok:
             raise ValueError(f"TrackerConfig out of range: {self}")

@@ -54,6 +54,14 @@ def points(summary: dict) -> float | None:
     return round(max(0.0, 1.0 - (summary["impact_speed_kph"] or 0.0) / test), 4)
 
 
+def impact_share(summaries: list[dict]) -> float | None:
+    """The mean impact speed of the threats hit that braking could avoid, as a share of
+    each one's test speed (None when there is none)."""
+    hits = [s for s in summaries if s["threat"] and s["collision"] and not s.get("unavoidable")]
+    shares = [(s["impact_speed_kph"] or 0.0) / s["test_speed_kph"] for s in hits if s.get("test_speed_kph")]
+    return sum(shares) / len(shares) if shares else None
+
+
 def family_rows(summaries: list[dict]) -> list[dict]:
     """One row per family, in first-seen order: cases, threats avoided, avoidable threats,
     false alarms, mean impact speed of the collisions [km/h], points and their maximum."""

@@ -12,7 +12,7 @@ from controllers.base import Controller
 from scenarios.spec import ScenarioCase
 from sim.camera import CameraConfig
 from sim.latency import LatencyMode
-from sim.ncap_score import format_family_rows
+from sim.ncap_score import format_family_rows, impact_share, points
 from sim.runner import SUMMARY_KEYS, TABLE_CAMERA_KEYS, run_case
 from sim.textures import TextureStyle
 
@@ -137,6 +137,10 @@ def format_table(summaries: list[dict], markdown: bool = False) -> str:
     if unavoidable:
         total += f"   unavoidable by braking: {len(unavoidable)} ({unavoidable[0]['unavoidable']}"
         total += f", {', '.join(s['scenario'] for s in unavoidable)})"
+    if threats:
+        total += f"\npoints: {sum(points(s) for s in threats):.1f}/{len(threats)}"
+        share = impact_share(summaries)
+        total += f"   mean impact of the rest: {share:.2f} of the test speed" if share is not None else ""
     if len({s["family"] for s in summaries}) > 1:
         total += "\n\n" + format_family_rows(summaries, markdown)
     if markdown:

@@ -94,6 +94,7 @@ def test_suite_table(tmp_path, capsys):
     assert main(["suite", "--out", str(tmp_path), "--scenarios", "CCRs-50,benign-receding"]) == 0
     out = capsys.readouterr().out
     assert "threats avoided: 1/1" in out and "false alarms: 0/1" in out
+    assert "points: 1.0/1" in out and "mean impact of the rest" not in out  # avoided: no rest
     assert (tmp_path / "summary.csv").read_text().count("\n") == 3
 
 

@@ -12,7 +12,7 @@ from scenarios.protocols import PROTOCOLS
 from sim.camera import CameraConfig
 from sim.cli import main
 from sim.episode import ScenarioSim
-from sim.ncap_score import family_rows, points, unavoidable_reason
+from sim.ncap_score import family_rows, impact_share, points, unavoidable_reason
 
 VRU_ROAD = {"lanes_left": 1, "lanes_right": 1, "sidewalk_m": 3.0, "barrier": False}
 
@@ -134,6 +134,11 @@ def test_head_on_is_marked_unavoidable_and_scored_by_impact_speed():
             "points": 0.75,
         }
     ]
+    # the rest's mean impact share leaves out what braking cannot avoid
+    hit = {**s, "unavoidable": None}
+    assert impact_share([hit, {**hit, "impact_speed_kph": 30.0}]) == pytest.approx(0.5)
+    assert impact_share([hit, {**hit, "impact_speed_kph": 40.0, "unavoidable": "stopped"}]) == pytest.approx(0.25)
+    assert impact_share([{**hit, "collision": False}]) is None
 
 
 def test_a_left_turn_follows_the_arc_and_reports_its_yaw_rate():

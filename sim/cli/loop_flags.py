@@ -65,6 +65,12 @@ def add_controller_flags(p: argparse.ArgumentParser, default: str | None = None)
         help="geofence/flow: count a fence's pixels only more than N rows above the road's fence edge "
         "as the estimator draws it (for networks that fence the road past its static depth; default off)",
     )
+    p.add_argument(
+        "--turn-across",
+        action=argparse.BooleanOptionalAction,
+        default=None,
+        help="geofence/flow: the tracker's rules for a turn across an oncoming car's path (docs/vru.md; default on)",
+    )
     from sim.cli.common import add_backend_flags
 
     add_backend_flags(p)
@@ -104,6 +110,8 @@ def controller_from_args(args, camera):
         if args.road_edge_rows < 0:
             raise CliError(f"--road-edge-rows {args.road_edge_rows}: must be an integer >= 0")
         settings["road_edge_rows"] = args.road_edge_rows
+    if args.turn_across is not None:
+        settings["turn_across"] = args.turn_across
     if args.weights is not None:
         if name != "geofence":
             raise CliError(f"--weights applies to the geofence controller, not {name!r}")
@@ -116,7 +124,8 @@ def controller_from_args(args, camera):
         settings.update(backend_kwargs(args))
     if settings and name in controllers.REGISTRY and not takes_fences:
         raise CliError(
-            f"--num-alphas / --ttc-thresholds / --frame-stride / --fovea-fences-from / --road-edge-rows apply to "
+            "--num-alphas / --ttc-thresholds / --frame-stride / --fovea-fences-from / --road-edge-rows / "
+            f"--[no-]turn-across apply to "
             f"{' and '.join(controllers.ESTIMATOR_CONTROLLERS)}, not {name!r}"
         )
     try:

@@ -1,0 +1,108 @@
+"""The tracker's rules for a turn across the path (``TrackerConfig.turn_across``), on
+synthetic regions from a pinhole projection of targets moving in closed form."""
+
+import dataclasses
+import math
+
+import numpy as np
+
+from controllers.evidence import in_path_evidence
+from controllers.geofence_config import GeofenceConfig
+from controllers.path_prediction import Odometry
+from controllers.tracker import BlobTracker, TrackerConfig
+from tests.test_tracker import SPEED_MPS, THRESHOLDS_S, _blob, _cal, _run
+
+OFF = TrackerConfig(turn_across=False)
+
+
+def test_a_track_that_crosses_the_centre_keeps_the_side_it_came_from():
+    # an adult from 3 m left (camera x -3.0) walking right at 1.2 m/s, 0.5 m wide: when the
+    # ego arrives (2.7 s) it stands in the path's right half; its region lies across the
+    # image centre from job 21 to 25
+    on, off = _run(-3.0, 1.2, jobs=26), _run(-3.0, 1.2, jobs=26, cfg=OFF)
+    assert all(on[21:26])  # predicted on by its leading edge
+    assert not any(off[21:26])  # across the centre: the corridor rule's alone
+    assert on[:21] == off[:21]
+
+
+def test_association_takes_the_ego_s_rotation_out():
+    # a region standing still in the world while the ego turns left at 0.5 rad/s: it moves
+    # right by fx * 0.05 rad (about 9 px) a job, more than its gate (6 px)
+    cal = _cal()
+    counts = {}
+    for cfg in (TrackerConfig(), OFF):
+        tracker, odo = BlobTracker(cfg, cal), Odometry()
+        for k in range(6):
+            t = 0.1 * k
+            pose = odo.update(t, SPEED_MPS, 0.5)
+            u = 60.0 + cal.fx_px * pose[2]
+            tracker.update(t, pose, SPEED_MPS, [_blob_at(cal, u, 10.0)])
+        counts[cfg.turn_across] = len(tracker.tracks)
+    assert counts == {True: 1, False: 3}  # without: a new track each job (two missed kept)
+
+
+def _blob_at(cal, u_left_px, width_px):
+    return dataclasses.replace(_blob(cal, -1.5, -1.0, 20.0, 2.0), u_left=u_left_px, u_right=u_left_px + width_px)
+
+
+def _floating(x0_m, vx_mps, v_along_mps, floating, jobs=12, depth0_m=40.0):
+    """In-path predictions at the last job of a target whose left edge starts ``x0_m``
+    right of the camera (camera x), moving right at ``vx_mps`` and towards the ego along
+    its heading at ``v_along_mps``, with the ground under it showing (its depth known)."""
+    cal, cfg = _cal(), TrackerConfig()
+    tracker, odo = BlobTracker(cfg, cal), Odometry()
+    closing = SPEED_MPS + v_along_mps
+    for k in range(jobs):
+        t = 0.1 * k
+        pose = odo.update(t, SPEED_MPS, 0.0)
+        z, x = depth0_m - closing * t, x0_m + vx_mps * t
+        blob = dataclasses.replace(_blob(cal, x, x + 1.8, z, z / closing), contact_depth_m=z)
+        (track,) = tracker.update(t, pose, SPEED_MPS, [blob])
+        track.floating = floating
+    return tracker.in_path(track, t, pose, SPEED_MPS, 0.0)
+
+
+def test_a_floating_region_predicts_only_as_oncoming_traffic_in_its_lane():
+    # crossing sideways at 4 m/s from 14 m right: in the path when the ego arrives (3.6 s),
+    # but a floating region that does not come towards the ego predicts nothing
+    assert _floating(14.0, -4.0, 0.0, floating=False)
+    assert not _floating(14.0, -4.0, 0.0, floating=True)
+    # oncoming at 8 m/s, drifting 0.9 m/s towards the path from 2 m right: its drift is
+    # taken out, it keeps its lane
+    assert _floating(2.0, -0.9, 8.0, floating=False)
+    assert not _floating(2.0, -0.9, 8.0, floating=True)
+    # oncoming in the ego's path, right half: predicted either way
+    assert _floating(0.3, 0.0, 8.0, floating=True)
+
+
+def _floating_box_evidence(turn_across: bool, top: int = 45) -> int:
+    """Counted in-path pixels of a predicted region floating above every fence's counted
+    rows (the road beneath an oncoming car)."""
+    cal = _cal()
+    thr = np.asarray(THRESHOLDS_S)
+    h, w = cal.height_px, cal.width_px
+    maps = np.zeros((len(thr), h, w), np.float32)
+    maps[:, top : top + 10, 150:160] = 1.0  # 10 x 10 px: 0.3 m^2 at 31 m, 0.5 m tall there
+    bands = [np.zeros((h, w), bool) for _ in thr]
+    for b in bands:
+        b[40:90] = True
+    predicted = maps[0] > 0.5
+    cfg = GeofenceConfig(thresholds_s=THRESHOLDS_S, tracker=TrackerConfig(turn_across=turn_across))
+    _, counted, _ = in_path_evidence(maps, thr, bands, cal, cfg, SPEED_MPS, 0.0, predicted, 0.5, static=False)
+    return int(counted.sum())
+
+
+def test_a_predicted_region_counts_without_reaching_the_lowest_counted_rows():
+    assert _floating_box_evidence(True) == 100
+    assert _floating_box_evidence(False) == 0
+    # one that stands there counts either way
+    assert _floating_box_evidence(False, top=80) == 100
+    assert _floating_box_evidence(True, top=80) == 100
+
+
+def test_turn_across_settings_are_checked():
+    import pytest
+
+    with pytest.raises(ValueError, match="float_closing_mps"):
+        TrackerConfig(float_closing_mps=-1.0)
+    assert not math.isnan(TrackerConfig().float_closing_mps)
