@@ -50,7 +50,7 @@ def trace_rows(loop: ClosedLoop) -> list[dict]:
 
 
 def write_outputs(
-    out_dir: Path, case, controller, camera, seed, actuator, summary, rows, video, textures, latency, timing
+    out_dir: Path, case, controller, camera, seed, actuator, summary, rows, video, textures, latency, timing, sensor=None
 ) -> None:
     out_dir.mkdir(parents=True, exist_ok=True)
     buf = io.StringIO()
@@ -73,6 +73,7 @@ def write_outputs(
         "textures": asdict(textures),
         "actuator": asdict(actuator),
         "video": video,
+        "sensor": sensor.as_dict() if sensor is not None else None,  # --realism's draw
     }
     write_text_atomic(out_dir / "trace.csv", buf.getvalue())
     write_text_atomic(out_dir / "config.yaml", yaml.safe_dump(config, sort_keys=False))

@@ -94,6 +94,7 @@ def run_case(
                 textures,
                 latency,
                 timing,
+                sensor,
             )
             if writer is not None:
                 writer.close()

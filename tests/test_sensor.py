@@ -96,3 +96,14 @@ def test_a_run_through_a_sensor_changes_the_images_only():
     assert np.array_equal(a.depth_m, b.depth_m) and np.array_equal(a.instance, b.instance)
     assert not np.array_equal(a.image, b.image) and not np.array_equal(a.fovea.rgb, b.fovea.rgb)
     assert a.image.shape == b.image.shape and b.fovea.rgb.shape == a.fovea.rgb.shape
+
+
+def test_a_run_through_the_sensor_records_its_draw_in_config_yaml(tmp_path, capsys):
+    from sim.cli import main
+
+    for flags, d in ((["--realism"], "r"), ([], "c")):
+        args = ["run", "CCRs-50", "--controller", "oracle", "--seed", "1", "--out", str(tmp_path / d)]
+        assert main(args + flags) == 0
+    printed = json.loads(capsys.readouterr().out.split("sensor: ", 1)[1].splitlines()[0])
+    assert yaml.safe_load((tmp_path / "r/config.yaml").read_text())["sensor"] == printed
+    assert yaml.safe_load((tmp_path / "c/config.yaml").read_text())["sensor"] is None
