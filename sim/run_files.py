@@ -50,7 +50,19 @@ def trace_rows(loop: ClosedLoop) -> list[dict]:
 
 
 def write_outputs(
-    out_dir: Path, case, controller, camera, seed, actuator, summary, rows, video, textures, latency, timing, sensor=None
+    out_dir: Path,
+    case,
+    controller,
+    camera,
+    seed,
+    actuator,
+    summary,
+    rows,
+    video,
+    textures,
+    latency,
+    timing,
+    sensor=None,
 ) -> None:
     out_dir.mkdir(parents=True, exist_ok=True)
     buf = io.StringIO()
