@@ -98,9 +98,8 @@ def judged_pixels(tau_ground: np.ndarray, fence: np.ndarray, tau_s: float, cfg, 
     above the road's fence edge as the estimator draws it (``fenced_road_edge``; no bound
     where it finds none): an estimator that reads the road as closing faster than it does
     fences it past the boundary, and bumps along that edge would stand in the counted rows
-    like obstacles (no bound without ``bound``: a view outside ``cfg.road_edge_views``).
-    With the bound on, rows whose ground lies outside the fence by ``cfg.road_edge_cap``
-    always count. The map is thresholded only with the bound on."""
+    like obstacles (not without ``bound``: a view outside ``cfg.road_edge_views``). With the bound on, rows whose ground lies outside the fence by
+    ``cfg.road_edge_cap`` always count. The map is thresholded only with the bound on."""
     band = counted_pixels(tau_ground, tau_s, cfg.ground_margin)
     edge = fenced_road_edge(fence > cfg.prob_inside) if bound and cfg.road_edge_rows >= 0 else None
     if edge is None:
