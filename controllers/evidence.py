@@ -90,7 +90,7 @@ def fenced_road_edge(inside: np.ndarray, min_share: float = 0.1) -> int | None:
     return int(np.median(h - run[have]))
 
 
-def judged_pixels(tau_ground: np.ndarray, fence: np.ndarray, tau_s: float, cfg, bound: bool = True) -> np.ndarray:
+def judged_pixels(tau_ground: np.ndarray, fence: np.ndarray, tau_s: float, cfg) -> np.ndarray:
     """(H, W) bool: rule 2 of ``controllers.geofence`` for fence ``tau_s``, its (H, W) map
     ``fence`` (inside above ``cfg.prob_inside``) and the ground's TTC map ``tau_ground``:
     the pixels whose ground lies outside the fence by ``cfg.ground_margin``
@@ -98,10 +98,10 @@ def judged_pixels(tau_ground: np.ndarray, fence: np.ndarray, tau_s: float, cfg, 
     above the road's fence edge as the estimator draws it (``fenced_road_edge``; no bound
     where it finds none): an estimator that reads the road as closing faster than it does
     fences it past the boundary, and bumps along that edge would stand in the counted rows
-    like obstacles (not without ``bound``: a view outside ``cfg.road_edge_views``). With the bound on, rows whose ground lies outside the fence by
+    like obstacles. With the bound on, rows whose ground lies outside the fence by
     ``cfg.road_edge_cap`` always count. The map is thresholded only with the bound on."""
     band = counted_pixels(tau_ground, tau_s, cfg.ground_margin)
-    edge = fenced_road_edge(fence > cfg.prob_inside) if bound and cfg.road_edge_rows >= 0 else None
+    edge = fenced_road_edge(fence > cfg.prob_inside) if cfg.road_edge_rows >= 0 else None
     if edge is None:
         return band
     rows = np.arange(band.shape[0])[:, None]

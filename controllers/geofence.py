@@ -187,8 +187,7 @@ class GeofenceController(Controller):
         """(H, W) bool per fence of ``thr`` (its map in ``maps``): the pixels where it can be
         judged (rule 2)."""
         tau_ground = ground_ttc_map(self._cals[view], speed_mps, yaw_rate)
-        bound = view in self.cfg.road_edge_views
-        return [judged_pixels(tau_ground, m, tau, self.cfg, bound) for m, tau in zip(maps, thr)]
+        return [judged_pixels(tau_ground, m, tau, self.cfg) for m, tau in zip(maps, thr)]
 
     def _fired(self, view: str, sizes: np.ndarray) -> np.ndarray:
         """In-path region sizes of a view's fences -> which fences fire (nested, persistent)."""

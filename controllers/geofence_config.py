@@ -74,7 +74,6 @@ class GeofenceConfig:
     # fences the road past its static depth; with the shipped weights it costs a `vru` case, a
     # `benign-vru` false alarm and an early warning (docs/pair_interval.md)
     road_edge_rows: int = -1
-    road_edge_views: tuple[str, ...] = ("wide", "fovea")  # the views the bound applies in
     # [-] with the bound on, rows with tau_ground > road_edge_cap * tau_i count regardless
     # (at least ground_margin, checked only when the bound is on)
     road_edge_cap: float = 2.0
@@ -117,7 +116,6 @@ class GeofenceConfig:
             "min_face_m2": self.min_face_m2 >= 0,
             "min_height_m": self.min_height_m >= 0,
             "min_height_views": all(v in ("wide", "fovea") for v in self.min_height_views),
-            "road_edge_views": all(v in ("wide", "fovea") for v in self.road_edge_views),
             "persistence_frames": self.persistence_frames >= 1,
             "release_frames": self.release_frames >= 1,
             "min_speed_mps": self.min_speed_mps >= 0,

@@ -140,8 +140,6 @@ def test_the_bound_drops_the_rows_up_to_n_above_the_edge():
         assert int(np.flatnonzero(band.any(axis=1)).max()) == edge - n - 1
     off = judged_pixels(tau_ground, fence, THR[0], GeofenceConfig())
     assert int(np.flatnonzero(off.any(axis=1)).max()) > edge  # the default counts the fenced road
-    unbound = judged_pixels(tau_ground, fence, THR[0], cfg, bound=False)  # a view outside road_edge_views
-    assert np.array_equal(unbound, off)
 
 
 def test_the_road_edge_settings_are_checked_and_reach_the_controllers():
@@ -155,8 +153,6 @@ def test_the_road_edge_settings_are_checked_and_reach_the_controllers():
     for bad in (-2, True, 1.5):
         with pytest.raises(ConfigError, match="road_edge_rows"):
             GeofenceConfig(road_edge_rows=bad)
-    with pytest.raises(ConfigError, match="road_edge_views"):
-        GeofenceConfig(road_edge_views=("left",))
     GeofenceConfig(ground_margin=2.5)  # the cap is checked only with the bound on
     with pytest.raises(ConfigError, match="road_edge_cap"):
         GeofenceConfig(road_edge_rows=1, road_edge_cap=1.0)
@@ -324,19 +320,3 @@ def test_a_turned_pair_is_derotated_and_counts_only_the_tracker_s_regions():
     assert quiet(turned) and not same and turned[-1].telemetry["derotated"] == "wide"
     _, same = jobs(1.0, derotate=False)
     assert same
-
-
-def test_the_road_edge_bound_applies_in_its_views_only():
-    tau_ground = road()
-    maps = (tau_ground[None] <= 2 * np.asarray(THR)[:, None, None]).astype(np.float32)  # fenced past the boundary
-    bands = {}
-    for views in (("wide", "fovea"), ("fovea",)):
-        cfg = GeofenceConfig(thresholds_s=THR, road_edge_rows=3, road_edge_cap=math.inf, road_edge_views=views)
-        ctrl = GeofenceController(MapEstimator(), cfg)
-        ctrl.reset(FOVEA_CAL)
-        bands[views] = ctrl._bands("wide", maps, np.asarray(THR), SPEED, 0.0)
-    ctrl = GeofenceController(MapEstimator(), GeofenceConfig(thresholds_s=THR))
-    ctrl.reset(FOVEA_CAL)
-    unbound = ctrl._bands("wide", maps, np.asarray(THR), SPEED, 0.0)
-    assert all(np.array_equal(a, b) for a, b in zip(bands[("fovea",)], unbound))
-    assert sum(int(b.sum()) for b in bands[("wide", "fovea")]) < sum(int(b.sum()) for b in unbound)
