@@ -1,6 +1,7 @@
 """The closed loop's real-time factor per K, and where a frame's time goes.
 
 Usage: python bench/bench_loop.py [--scenario CCRs-50] [--ks 1 2 4 8 16] [--controller geofence]
+                                  [--turn-across on|off|both]
 
 One run per K of the same case with the network-driven controller and ``measured``
 latency, all in this process, one after the other: per K, the real-time factor at the
@@ -8,8 +9,10 @@ camera's 10 Hz (simulated seconds per wall-clock second of the whole loop), and 
 wall time per frame [ms] of rendering, traffic integration (highway-env substeps and
 footprint checks), per-actor truth, the per-pixel ground truth that the fence-lag
 measurement needs (analysis only: a deployed loop would not compute it), the
-estimator and the controller's own logic. Prints the figures of this run; asserts
-nothing. Run it alone: other jobs on a 2-core CPU inflate every figure.
+estimator and the controller's own logic. ``--turn-across both`` runs each K with the
+tracker's turn rules on and off, one after the other, and prints the ratio of the
+controller's own time (on / off). Prints the figures of this run; asserts nothing. Run it
+alone: other jobs on a 2-core CPU inflate every figure.
 """
 
 from __future__ import annotations
@@ -37,12 +40,15 @@ def main() -> None:
     ap.add_argument("--ks", type=int, nargs="+", default=[1, 2, 4, 8, 16])
     ap.add_argument("--controller", default="geofence", choices=controllers.ESTIMATOR_CONTROLLERS)
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--turn-across", choices=("on", "off", "both"), default="on")
     args = ap.parse_args()
+    turns = {"on": (True,), "off": (False,), "both": (True, False)}[args.turn_across]
     case = scenarios.resolve(args.scenario)[0]
     cam = CameraConfig()
     print(f"{args.scenario}, {args.controller}, latency measured, {cam.height_px}x{cam.width_px} at {cam.fps_hz:g} Hz")
     cols = (
         "K",
+        "turn",
         "frames",
         "jobs",
         "skipped",
@@ -57,8 +63,9 @@ def main() -> None:
         "total",
     )
     print(("{:>9}" * len(cols)).format(*cols) + "   (ms per frame)")
-    for k in args.ks:
-        ctrl = controllers.make(args.controller, thresholds_s=default_thresholds(k))
+    control_ms = {}
+    for k, turn in ((k, turn) for k in args.ks for turn in turns):
+        ctrl = controllers.make(args.controller, thresholds_s=default_thresholds(k), turn_across=turn)
         sim = ScenarioSim(case, cam, args.seed, render=True)
         loop = ClosedLoop(
             sim,
@@ -78,10 +85,20 @@ def main() -> None:
         tm = loop.timing
         gt = tm.get("ground_truth_s", 0.0)
         per = [tm["render_s"], tm["traffic_s"], tm["truth_s"], gt, est_s, tm["controller_s"] - est_s, wall]
+        control_ms[k, turn] = 1e3 * per[5] / n
         print(
-            ("{:>9}" * 4).format(k, n, len(jobs), sum(r.status == "skipped" for r in loop.records))
+            ("{:>9}" * 5).format(
+                k, "on" if turn else "off", n, len(jobs), sum(r.status == "skipped" for r in loop.records)
+            )
             + f"{sim.t_s / wall:>9.2f}{sim.t_s / (wall - gt):>9.2f}"
             + ("{:>9.1f}" * len(per)).format(*(1e3 * x / n for x in per))
+        )
+
+    for k in args.ks if len(turns) == 2 else ():
+        on, off = control_ms[k, True], control_ms[k, False]
+        print(
+            f"K = {k}: the controller's own logic {on:.2f} ms a frame with the turn rules, "
+            f"{off:.2f} without: {on / off:.2f}x"
         )
 
 

@@ -216,8 +216,9 @@ def fenced_blobs(
 
 def _predicted_regions(mask, cal: Calibration, cfg, speed_mps: float, largest_s: float, min_height_m: float):
     """(pixels of the largest, (H, W) bool mask of them all) of the regions of ``mask``
-    (predicted into the path) that span ``min_height_m`` and the area of a face at the
-    static depth of the largest fence ``largest_s`` [s], wherever they stand: a car that
+    (predicted into the path) that span ``min_height_m`` at the static depth of the largest
+    fence ``largest_s`` [s], when the largest of them covers the area of a face there,
+    wherever they stand: a car that
     the tracker predicts across a turning ego's path may float above the counted rows
     (its road shows beneath it); no region: (0, empty)."""
     depth = static_depth_m(cal, speed_mps, largest_s)
@@ -264,14 +265,16 @@ def in_path_evidence(
         rows = cal.fy_px * min_height_m / depth if depth > 1e-6 else 0.0
         area, standing = standing_regions(inside & region & static, lowest, c.contact_px, rows)
         need = need_px(cal, depth, c.min_region_px, c.min_face_m2)
-        if c.tracker.turn_across:
+        ok = area >= need
+        if c.tracker.turn_across:  # the largest fence's size suffices for a predicted region
             area_p, ahead = _predicted_regions(predicted & inside & bands[i], cal, c, speed_mps, thr[-1], min_height_m)
-            area_p = max(area_p, need) if area_p else 0
+            ok_p, rank_p = area_p > 0, max(area_p, need) if area_p else 0
         else:
             area_p, ahead = standing_regions(predicted & inside & bands[i], lowest, c.contact_px, rows)
-        if area_p > area:
-            area, standing = area_p, ahead
-        if area >= need:
+            ok_p, rank_p = area_p >= need, area_p
+        if rank_p > area:
+            area, standing, ok = area_p, ahead, ok_p
+        if ok:
             sizes[i] = area
             counted |= standing
         corridor |= region

@@ -5,10 +5,13 @@ path.
 Regions (``TrackerConfig.all_fences``): each fence's inside pixels on the rows where that
 fence can be judged (the ground there lies clearly outside it: ``controllers.evidence.
 judged_pixels``), joined over the fences; a region stands on the road when it reaches
-down to the lowest such rows of a fence. At 50 km/h the largest fence is judged only near
+down to the lowest such rows of a fence (with ``TrackerConfig.turn_across``, any region
+counts: one that does not reach them floats, ``Track.floating``, like an oncoming car
+whose road shows beneath it, and predicts only as oncoming traffic). At 50 km/h the largest fence is judged only near
 the horizon, above a crossing cyclist's wheels; the smaller fences see it lower down. A
 region must stand up like a road user (``_upright``): span ``min_height_m`` at the static
-depth of its fence, and have an inner edge that does not slant outwards row by row like
+depth of its fence (with ``turn_across``, at the ground's depth under it where that is
+further), and have an inner edge that does not slant outwards row by row like
 a strip of verge that the network fenced along a fence's boundary. Parts one above the
 other with at most ``join_rows`` rows between them are one region: a crossing cyclist's
 upper body counted in the largest fence and its wheels in a smaller one are one target,
@@ -91,9 +94,9 @@ class PathPrediction:
         """Extract the regions of ``view`` (sorted (K, H, W) maps of fences ``thr`` [s],
         ``bands``: each fence's counted pixels, None where the view's pair turned too far)
         and associate them with its tracks. A region stands on the road where its bottom
-        reaches a fence's lowest counted rows, or, with ``TrackerConfig.turn_across``,
-        anywhere the ground under it shows (it floats then: an oncoming car whose road
-        lies outside the fences beneath it)."""
+        reaches a fence's lowest counted rows; with ``TrackerConfig.turn_across`` one that
+        does not is kept too, as floating (an oncoming car whose road lies outside the
+        fences beneath it)."""
         if view not in self.views:
             return
         if bands is None or not any(b.any() for b in bands):  # nothing to judge: the tracks age

@@ -53,8 +53,8 @@ alone): association compares columns with the ego's rotation since a track's las
 taken out (a turning ego sweeps the world sideways by fx per radian); a track whose region
 comes to lie across the image centre keeps the side it came from, and its leading edge
 (the right one for a track from the left) stands in for its inner edge in steps 3 and 4;
-a track whose region floats (``Track.floating``: it stands on the ground where that
-shows, not at a fence's lowest counted rows) predicts only when it comes towards the ego
+a track whose region floats (``Track.floating``: it does not reach a fence's lowest
+counted rows) predicts only when it comes towards the ego
 at ``float_closing_mps`` or faster along the ego's heading, and then moves along that
 heading only (oncoming traffic keeps its lane).
 
@@ -110,6 +110,9 @@ class Track:
     refuted: bool = False  # a finer view found its bearing moving out: it predicts no more
     held: int = 0  # [jobs] left in which it counts as predicted though its prediction fails
     floating: bool = False  # its latest region does not reach a fence's lowest counted rows
+    # the side of the image centre (True: the left) of its latest region not across the
+    # centre, also when that region has left the window
+    last_side: bool | None = None
 
     @property
     def centre_px(self) -> float:
@@ -121,13 +124,15 @@ class Track:
 
     def side(self, cal: Calibration, keep: bool) -> bool | None:
         """With ``keep``, the side of the image centre it came from (True: the left), read
-        on its earliest region in the window not across the centre; None without ``keep``
-        or when every region lies across the centre."""
-        if keep:
-            for o in self.obs:
-                if not o.u_left <= cal.cx_px <= o.u_right:
-                    return o.u_right < cal.cx_px
-        return None
+        on its earliest region in the window not across the centre, or, when every region
+        in the window lies across it, on its last region before them; None without
+        ``keep`` or when it was first seen across the centre and has stayed there."""
+        if not keep:
+            return None
+        for o in self.obs:
+            if not o.u_left <= cal.cx_px <= o.u_right:
+                return o.u_right < cal.cx_px
+        return self.last_side
 
     def contact_time_s(self) -> float:
         """t0 [s]: the earliest time by which the track reaches the camera plane."""
@@ -169,6 +174,8 @@ class BlobTracker:
             tr = self.tracks[best]
             obs = _Obs(t_s, b.u_left, b.u_right, b.tau_bound_s, b.contact_depth_m, speed_mps, pose, b.inner_px)
             tr.obs.append(obs)
+            if not obs.u_left <= self.cal.cx_px <= obs.u_right:
+                tr.last_side = obs.u_right < self.cal.cx_px
             del tr.obs[: -c.window]
             tr.missed = 0
             out.append(tr)
@@ -179,8 +186,9 @@ class BlobTracker:
 
     def _ground_points(self, tr: Track, t0: float) -> tuple[np.ndarray, np.ndarray, float] | None:
         """(times (N,), odometry points (N, 2) of the inner edge, the latest region's extent
-        [m] beyond its inner edge); None when a region lies across the image centre, or,
-        without ``extent``, touches the image's side (cut there: where it ends is not
+        [m] beyond its inner edge); None when a region lies across the image centre and
+        the track's side is not known (``Track.side``), or, without ``extent``, touches
+        the image's side (cut there: where it ends is not
         seen)."""
         cal, c = self.cal, self.cfg
         cos_p = math.cos(math.radians(cal.pitch_deg))
@@ -260,11 +268,13 @@ class BlobTracker:
         if not c.min_speed_mps <= float(np.hypot(*vel)) <= c.max_speed_mps:
             return False
         if c.turn_across and tr.floating:  # oncoming, keeping its lane, or nothing
-            heading0 = np.array([math.cos(pose[2]), math.sin(pose[2])])
-            along = float(vel @ heading0)
+            # the ego's heading now: beside a turning ego's path the oncoming lane runs along
+            # the heading it turns from, which its first jobs of the turn still hold
+            lane = np.array([math.cos(pose[2]), math.sin(pose[2])])
+            along = float(vel @ lane)
             if along > -c.float_closing_mps:
                 return False
-            vel = along * heading0
+            vel = along * lane
         horizon = max(t0 - t_s, 0.0) + c.horizon_pad_s
         times = np.arange(0.0, horizon + 1e-9, c.step_s)
         target = coef[0] + np.outer(times + (t_s - tm), vel)  # (N, 2)
@@ -284,7 +294,9 @@ class BlobTracker:
         # the target spans from its inner edge outwards, away from the image centre, by its
         # extent (ego frame: left of the centre is + left)
         side = tr.side(cal, c.turn_across)
-        outwards = (1.0 if tr.obs[-1].u_right < cal.cx_px else -1.0) if side is None else (1.0 if side else -1.0)
+        last = tr.obs[-1]
+        across = side is not None and last.u_left <= cal.cx_px <= last.u_right  # spans out from its leading edge
+        outwards = (1.0 if side else -1.0) if across else (1.0 if last.u_right < cal.cx_px else -1.0)
         far = left + outwards * extent_m  # +-inf where the image's side cuts it
         lo, hi = np.minimum(left, far), np.maximum(left, far)
         return bool(np.any((np.abs(fwd) <= reach_l) & (lo <= reach_w) & (hi >= -reach_w)))

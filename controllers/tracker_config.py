@@ -75,8 +75,8 @@ class TrackerConfig:
     # truck's far corner as a collision course (benign-parked-truck at K = 4)
     predict_unchecked: bool = False
     # the rules that let a turn across an oncoming car's path brake on the yaw rate alone
-    # (docs/vru.md, "A turn across the path"): a region stands where the ground under it
-    # shows, not only at a fence's lowest counted rows; a track keeps the side it came from
+    # (docs/vru.md, "A turn across the path on the yaw rate alone"): a region counts also
+    # where it does not reach a fence's lowest counted rows (it floats); a track keeps the side it came from
     # when its region crosses the image centre; a region's height is judged at that
     # ground's depth where it lies beyond the fence's static depth; association takes the
     # ego's rotation out; a predicted region counts without reaching the lowest counted

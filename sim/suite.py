@@ -138,7 +138,7 @@ def format_table(summaries: list[dict], markdown: bool = False) -> str:
         total += f"   unavoidable by braking: {len(unavoidable)} ({unavoidable[0]['unavoidable']}"
         total += f", {', '.join(s['scenario'] for s in unavoidable)})"
     if threats:
-        total += f"\npoints: {sum(points(s) for s in threats):.1f}/{len(threats)}"
+        total += ("\n\n" if markdown else "\n") + f"points: {sum(points(s) for s in threats):.1f}/{len(threats)}"
         share = impact_share(summaries)
         total += f"   mean impact of the rest: {share:.2f} of the test speed" if share is not None else ""
     if len({s["family"] for s in summaries}) > 1:

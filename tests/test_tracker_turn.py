@@ -8,7 +8,7 @@ import numpy as np
 
 from controllers.evidence import in_path_evidence
 from controllers.geofence_config import GeofenceConfig
-from controllers.path_prediction import Odometry
+from controllers.path_prediction import Odometry, PathPrediction
 from controllers.tracker import BlobTracker, TrackerConfig
 from tests.test_tracker import SPEED_MPS, THRESHOLDS_S, _blob, _cal, _run
 
@@ -73,31 +73,75 @@ def test_a_floating_region_predicts_only_as_oncoming_traffic_in_its_lane():
     assert not _floating(2.0, -0.9, 8.0, floating=True)
     # oncoming in the ego's path, right half: predicted either way
     assert _floating(0.3, 0.0, 8.0, floating=True)
+    # along the ego's heading at least float_closing_mps (2 m/s) towards it
+    assert not _floating(0.3, 0.0, 1.0, floating=True)
+    assert _floating(0.3, 0.0, 3.0, floating=True)
 
 
-def _floating_box_evidence(turn_across: bool, top: int = 45) -> int:
+def test_a_track_across_the_centre_for_the_whole_window_keeps_its_side():
+    # from 1.5 m left at 0.8 m/s, 0.5 m wide: across the centre from job 13 to job 18,
+    # then in the path's right half when the ego arrives (2.7 s)
+    on = _run(-1.5, 0.8, jobs=19)
+    assert all(on[12:19])
+
+
+def _observed(turn_across: bool, rows: slice) -> list:
+    """(left column, floating) of the regions ``observe`` keeps of a box inside every fence
+    on ``rows``, over the counted rows 40-89, the ground around it outside every fence."""
+    cal = _cal()
+    h, w = cal.height_px, cal.width_px
+    thr = np.asarray(THRESHOLDS_S)
+    maps = np.zeros((len(thr), h, w), np.float32)
+    maps[:, rows, 150:160] = 1.0
+    bands = [np.zeros((h, w), bool) for _ in thr]
+    for b in bands:
+        b[40:90] = True
+    tracker = TrackerConfig(turn_across=turn_across, predict_unchecked=True)
+    paths = PathPrediction(GeofenceConfig(thresholds_s=THRESHOLDS_S, tracker=tracker), {"wide": cal})
+    paths.start_job(0.0, SPEED_MPS, 0.0)
+    paths.observe("wide", maps, thr, bands, SPEED_MPS, 0.0)
+    return [(blob.u_left, track.floating) for blob, track in paths._seen["wide"]]
+
+
+def test_observe_keeps_a_floating_region_and_judges_its_height_where_it_stands():
+    # 15 rows, ending 30 rows above the counted rows' lowest row (89)
+    assert _observed(True, slice(45, 60)) == [(150, True)]
+    assert _observed(False, slice(45, 60)) == []
+    # 6 rows: short for 0.5 m at the 0.8 s fence's static depth (8.9 m: 10 rows), tall
+    # enough at the depth of the ground under it (row 58: 22 m, 4 rows)
+    assert _observed(True, slice(52, 58)) == [(150, True)]
+    # standing on the lowest counted rows: kept either way, not floating
+    assert _observed(False, slice(70, 90)) == _observed(True, slice(70, 90)) == [(150, False)]
+
+
+def _floating_box_evidence(turn_across: bool, top: int = 45, rows: int = 10, cols: int = 10) -> int:
     """Counted in-path pixels of a predicted region floating above every fence's counted
-    rows (the road beneath an oncoming car)."""
+    rows (the road beneath an oncoming car); each fence counts it, its size the region's."""
     cal = _cal()
     thr = np.asarray(THRESHOLDS_S)
     h, w = cal.height_px, cal.width_px
     maps = np.zeros((len(thr), h, w), np.float32)
-    maps[:, top : top + 10, 150:160] = 1.0  # 10 x 10 px: 0.3 m^2 at 31 m, 0.5 m tall there
+    # at the largest fence's static depth (31 m) 0.3 m^2 covers 10 px and 0.5 m spans 2.9 rows
+    maps[:, top : top + rows, 150 : 150 + cols] = 1.0
     bands = [np.zeros((h, w), bool) for _ in thr]
     for b in bands:
         b[40:90] = True
     predicted = maps[0] > 0.5
     cfg = GeofenceConfig(thresholds_s=THRESHOLDS_S, tracker=TrackerConfig(turn_across=turn_across))
-    _, counted, _ = in_path_evidence(maps, thr, bands, cal, cfg, SPEED_MPS, 0.0, predicted, 0.5, static=False)
-    return int(counted.sum())
+    sizes, counted, _ = in_path_evidence(maps, thr, bands, cal, cfg, SPEED_MPS, 0.0, predicted, 0.5, static=False)
+    assert set(sizes.tolist()) <= {0, int(counted.sum())}  # the size is the region's pixels
+    return int(counted.sum()), int((sizes > 0).sum())
 
 
 def test_a_predicted_region_counts_without_reaching_the_lowest_counted_rows():
-    assert _floating_box_evidence(True) == 100
-    assert _floating_box_evidence(False) == 0
-    # one that stands there counts either way
-    assert _floating_box_evidence(False, top=80) == 100
-    assert _floating_box_evidence(True, top=80) == 100
+    assert _floating_box_evidence(True) == (100, 4)  # in every fence, the smallest's need waived
+    assert _floating_box_evidence(False) == (0, 0)
+    # one that stands there counts either way; without the rules only where it is big enough
+    assert _floating_box_evidence(False, top=80) == (100, 3)
+    assert _floating_box_evidence(True, top=80) == (100, 4)
+    # smaller than a face at the largest fence's depth, or shorter than 0.5 m there: nothing
+    assert _floating_box_evidence(True, rows=4, cols=2) == (0, 0)
+    assert _floating_box_evidence(True, rows=2, cols=50) == (0, 0)
 
 
 def test_turn_across_settings_are_checked():
@@ -105,4 +149,5 @@ def test_turn_across_settings_are_checked():
 
     with pytest.raises(ValueError, match="float_closing_mps"):
         TrackerConfig(float_closing_mps=-1.0)
-    assert not math.isnan(TrackerConfig().float_closing_mps)
+    with pytest.raises(ValueError, match="float_closing_mps"):
+        TrackerConfig(float_closing_mps=math.nan)
