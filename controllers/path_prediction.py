@@ -117,7 +117,7 @@ class PathPrediction:
             rows = slice(max(lowest - c.contact_px, 0), lowest + 1)
             touch[rows] |= bands[i][rows]
         standing = touch
-        if t.turn_across:  # a region stands wherever the ground under it shows
+        if t.turn_across:  # every region is kept; one that misses the lowest counted rows floats
             touch = inside
         depths = np.array([max(static_depth_m(cal, speed_mps, tau), 1e-6) for tau in thr])
         pad = np.ceil(cal.fx_px * t.contact_pad_m / depths)

@@ -268,8 +268,9 @@ class BlobTracker:
         if not c.min_speed_mps <= float(np.hypot(*vel)) <= c.max_speed_mps:
             return False
         if c.turn_across and tr.floating:  # oncoming, keeping its lane, or nothing
-            # the ego's heading now: beside a turning ego's path the oncoming lane runs along
-            # the heading it turns from, which its first jobs of the turn still hold
+            # the ego's heading now: the oncoming lane runs along the heading it turns from,
+            # which the turn's first jobs still hold (later in the turn the projection tilts
+            # by the heading turned so far)
             lane = np.array([math.cos(pose[2]), math.sin(pose[2])])
             along = float(vel @ lane)
             if along > -c.float_closing_mps:

@@ -76,9 +76,10 @@ class TrackerConfig:
     predict_unchecked: bool = False
     # the rules that let a turn across an oncoming car's path brake on the yaw rate alone
     # (docs/vru.md, "A turn across the path on the yaw rate alone"): a region counts also
-    # where it does not reach a fence's lowest counted rows (it floats); a track keeps the side it came from
-    # when its region crosses the image centre; a region's height is judged at that
-    # ground's depth where it lies beyond the fence's static depth; association takes the
+    # where it does not reach a fence's lowest counted rows (it floats); a track keeps the
+    # side it came from when its region crosses the image centre; a region's height is
+    # judged at the depth of the ground under it where that lies beyond the fence's static
+    # depth; association takes the
     # ego's rotation out; a predicted region counts without reaching the lowest counted
     # rows if it is as tall and as big as the largest fence asks. Off: the straight-road
     # tracker of earlier releases

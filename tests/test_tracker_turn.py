@@ -79,10 +79,22 @@ def test_a_floating_region_predicts_only_as_oncoming_traffic_in_its_lane():
 
 
 def test_a_track_across_the_centre_for_the_whole_window_keeps_its_side():
-    # from 1.5 m left at 0.8 m/s, 0.5 m wide: across the centre from job 13 to job 18,
-    # then in the path's right half when the ego arrives (2.7 s)
-    on = _run(-1.5, 0.8, jobs=19)
-    assert all(on[12:19])
+    # 0.8 m wide, from 2 m left at 0.8 m/s: across the centre from job 15, its
+    # leading edge 1 m right of the path's centre when the ego arrives (2.7 s); from job
+    # 20 every region of the 6-job window lies across the centre
+    cal, cfg = _cal(), TrackerConfig(min_speed_mps=0.5)
+    tracker, odo = BlobTracker(cfg, cal), Odometry()
+    for k in range(25):
+        t = 0.1 * k
+        pose = odo.update(t, SPEED_MPS, 0.0)
+        z, x = 30.0 - SPEED_MPS * t, -2.0 + 0.8 * t
+        (track,) = tracker.update(t, pose, SPEED_MPS, [_blob(cal, x, x + 0.8, z, z / SPEED_MPS)])
+        if k >= 20:
+            assert all(o.u_left <= cal.cx_px <= o.u_right for o in track.obs)
+            assert track.side(cal, True) is True  # the last region beside the centre: left
+            assert tracker.in_path(track, t, pose, SPEED_MPS, 0.0)
+    off = BlobTracker(TrackerConfig(min_speed_mps=0.5, turn_across=False), cal)
+    assert not off.in_path(track, t, pose, SPEED_MPS, 0.0)  # across the centre: no side, no prediction
 
 
 def _observed(turn_across: bool, rows: slice) -> list:
@@ -114,7 +126,7 @@ def test_observe_keeps_a_floating_region_and_judges_its_height_where_it_stands()
     assert _observed(False, slice(70, 90)) == _observed(True, slice(70, 90)) == [(150, False)]
 
 
-def _floating_box_evidence(turn_across: bool, top: int = 45, rows: int = 10, cols: int = 10) -> int:
+def _floating_box_evidence(turn_across: bool, top: int = 45, rows: int = 10, cols: int = 10) -> tuple[int, int]:
     """Counted in-path pixels of a predicted region floating above every fence's counted
     rows (the road beneath an oncoming car); each fence counts it, its size the region's."""
     cal = _cal()
