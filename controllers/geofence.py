@@ -41,8 +41,8 @@ estimator's map p_i = p(0 < tau <= tau_i)):
    road nearer than the fence's ground boundary, so its counted pixels reach down to
    the lowest counted row; a region whose bottom ends more than ``contact_px`` rows
    above it (the textureless sky, a far tree top) does not count (but for a region the
-   tracker predicts, with ``TrackerConfig.turn_across``, as tall and as big as the
-   largest fence asks: ``controllers.evidence``). The largest such
+   tracker predicts, with ``TrackerConfig.turn_across``, that is as tall and as big as
+   the largest fence asks at its depth: ``controllers.evidence``). The largest such
    8-connected region must have at least ``min_region_px`` pixels, and at least the
    area that ``min_face_m2`` of face covers at the fence's depth Z_i,
    fx fy A / Z_i^2 (a 1.7 x 1.5 m target at 53 m covers about 6 x 5 px; 0.3 m^2 at
