@@ -54,9 +54,10 @@ taken out (a turning ego sweeps the world sideways by fx per radian); a track wh
 comes to lie across the image centre keeps the side it came from, and its leading edge
 (the right one for a track from the left) stands in for its inner edge in steps 3 and 4;
 a track whose region floats (``Track.floating``: it does not reach a fence's lowest
-counted rows) predicts only when it comes towards the ego
-at ``float_closing_mps`` or faster along the ego's heading, and then moves along that
-heading only (oncoming traffic keeps its lane).
+counted rows) predicts only when it comes towards the ego at ``float_closing_mps`` or
+faster along the ego's heading when the track began (``Track.first_psi``: before the turn,
+for a car tracked as it comes), and then moves along that heading only (oncoming traffic
+keeps its lane).
 
 The regions, and the fovea's check of the wide view's bearing test:
 ``controllers.path_prediction``.
@@ -113,6 +114,7 @@ class Track:
     # the side of the image centre (True: the left) of its latest region not across the
     # centre, also when that region has left the window
     last_side: bool | None = None
+    first_psi: float | None = None  # [rad] the ego's heading at its first region
 
     @property
     def centre_px(self) -> float:
@@ -174,6 +176,8 @@ class BlobTracker:
             tr = self.tracks[best]
             obs = _Obs(t_s, b.u_left, b.u_right, b.tau_bound_s, b.contact_depth_m, speed_mps, pose, b.inner_px)
             tr.obs.append(obs)
+            if tr.first_psi is None:
+                tr.first_psi = pose[2]
             if not obs.u_left <= self.cal.cx_px <= obs.u_right:
                 tr.last_side = obs.u_right < self.cal.cx_px
             del tr.obs[: -c.window]
@@ -268,10 +272,9 @@ class BlobTracker:
         if not c.min_speed_mps <= float(np.hypot(*vel)) <= c.max_speed_mps:
             return False
         if c.turn_across and tr.floating:  # oncoming, keeping its lane, or nothing
-            # the ego's heading now: the oncoming lane runs along the heading it turns from,
-            # which the turn's first jobs still hold (later in the turn the projection tilts
-            # by the heading turned so far)
-            lane = np.array([math.cos(pose[2]), math.sin(pose[2])])
+            # the oncoming lane runs along the ego's heading when the track began: before the
+            # turn, for a car tracked as it comes
+            lane = np.array([math.cos(tr.first_psi), math.sin(tr.first_psi)])
             along = float(vel @ lane)
             if along > -c.float_closing_mps:
                 return False

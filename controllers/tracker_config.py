@@ -86,8 +86,8 @@ class TrackerConfig:
     turn_across: bool = True
     # [m/s] with ``turn_across``, a region that does not reach a fence's lowest counted
     # rows (it floats: an oncoming car whose road shows beneath it) predicts only when it
-    # comes towards the ego at least this fast along the ego's heading, and then along
-    # that heading only (oncoming traffic keeps its lane): a fenced fragment beside the
+    # comes towards the ego at least this fast along the ego's heading when its track
+    # began, and then along that heading only (oncoming traffic keeps its lane): a fenced fragment beside the
     # road, placed at the ground's depth, would otherwise fit a fast sideways motion
     float_closing_mps: float = 2.0
 

@@ -163,3 +163,15 @@ def test_turn_across_settings_are_checked():
         TrackerConfig(float_closing_mps=-1.0)
     with pytest.raises(ValueError, match="float_closing_mps"):
         TrackerConfig(float_closing_mps=math.nan)
+
+
+def test_a_floating_track_keeps_the_lane_of_the_heading_it_was_first_seen_at():
+    # the ego turns left at 0.5 rad/s; a region standing still in the world is tracked
+    # over the turn: its lane is the heading at its first region, not the ego's now
+    cal = _cal()
+    tracker, odo = BlobTracker(TrackerConfig(), cal), Odometry()
+    for k in range(6):
+        t = 0.1 * k
+        pose = odo.update(t, SPEED_MPS, 0.5)
+        (track,) = tracker.update(t, pose, SPEED_MPS, [_blob_at(cal, 60.0 + cal.fx_px * pose[2], 10.0)])
+    assert track.first_psi == 0.0 and pose[2] > 0.2
