@@ -218,9 +218,8 @@ def _predicted_regions(mask, cal: Calibration, cfg, speed_mps: float, largest_s:
     """(pixels of the largest, (H, W) bool mask of them all) of the regions of ``mask``
     (predicted into the path) that span ``min_height_m`` at the static depth of the largest
     fence ``largest_s`` [s], when the largest of them covers the area of a face there,
-    wherever they stand: a car that
-    the tracker predicts across a turning ego's path may float above the counted rows
-    (its road shows beneath it); no region: (0, empty)."""
+    wherever they stand: a car that the tracker predicts across a turning ego's path may
+    float above the counted rows (its road shows beneath it); no region: (0, empty)."""
     depth = static_depth_m(cal, speed_mps, largest_s)
     rows = cal.fy_px * min_height_m / depth if depth > 1e-6 else 0.0
     area, found = standing_regions(mask, 0, 0, rows)

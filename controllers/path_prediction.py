@@ -2,23 +2,23 @@
 tracker (``controllers.tracker``) follows, and which of them it predicts into the ego's
 path.
 
-Regions (``TrackerConfig.all_fences``): each fence's inside pixels on the rows where that
-fence can be judged (the ground there lies clearly outside it: ``controllers.evidence.
-judged_pixels``), joined over the fences; a region stands on the road when it reaches
-down to the lowest such rows of a fence (with ``TrackerConfig.turn_across``, any region
-counts: one that does not reach them floats, ``Track.floating``, like an oncoming car
-whose road shows beneath it, and predicts only as oncoming traffic). At 50 km/h the largest fence is judged only near
-the horizon, above a crossing cyclist's wheels; the smaller fences see it lower down. A
-region must stand up like a road user (``_upright``): span ``min_height_m`` at the static
-depth of its fence (with ``turn_across``, at the ground's depth under it where that is
-further), and have an inner edge that does not slant outwards row by row like
-a strip of verge that the network fenced along a fence's boundary. Parts one above the
-other with at most ``join_rows`` rows between them are one region: a crossing cyclist's
-upper body counted in the largest fence and its wheels in a smaller one are one target,
-not two tracks that swap their regions job by job. A region's inner edge is read on the
-largest fence that holds part of it (``TrackerConfig.edge_from_largest``): a smaller
-fence's counted rows reach lower, where a kerb line crosses its lowest row at a column that
-holds still.
+Regions (``TrackerConfig.all_fences``): each fence's inside pixels on the rows where
+that fence can be judged (the ground there lies clearly outside it:
+``controllers.evidence.judged_pixels``), joined over the fences; a region stands on the
+road when it reaches down to the lowest such rows of a fence (with
+``TrackerConfig.turn_across``, any region counts: one that does not reach them floats,
+``Track.floating``, like an oncoming car whose road shows beneath it, and predicts only
+as oncoming traffic). At 50 km/h the largest fence is judged only near the horizon,
+above a crossing cyclist's wheels; the smaller fences see it lower down. A region must
+stand up like a road user (``_upright``): span ``min_height_m`` at the static depth of
+its fence (with ``turn_across``, at the ground's depth under it where that is further),
+and have an inner edge that does not slant outwards row by row like a strip of verge
+that the network fenced along a fence's boundary. Parts one above the other with at most
+``join_rows`` rows between them are one region: a crossing cyclist's upper body counted
+in the largest fence and its wheels in a smaller one are one target, not two tracks that
+swap their regions job by job. A region's inner edge is read on the largest fence that
+holds part of it (``TrackerConfig.edge_from_largest``): a smaller fence's counted rows
+reach lower, where a kerb line crosses its lowest row at a column that holds still.
 
 The check (``TrackerConfig.check_views``): the wide view predicts, and the fovea, which
 sees the same bearings four times finer, checks its bearing test. A wide track predicted
@@ -160,13 +160,13 @@ class PathPrediction:
         for v in t.check_views:
             if v == view or v not in self._seen:
                 continue
-            cx = self.cals[v].cx_px
+            cal_v = self.cals[v]
             near = [
                 (d, other)
                 for _, other in self._seen[v]
                 # its inner edge on one side throughout: across the centre it has none
-                if len(other.obs) >= t.min_hits and not any(o.u_left <= cx <= o.u_right for o in other.obs)
-                if (d := abs(other.obs[-1].inner_bearing(self.cals[v]) - bearing)) <= tol
+                if len(other.obs) >= t.min_hits and not any(o.across(cal_v) for o in other.obs)
+                if (d := abs(other.obs[-1].inner_bearing(cal_v) - bearing)) <= tol
             ]
             if near:  # the nearest in bearing
                 other = min(near, key=lambda x: x[0])[1]

@@ -91,11 +91,15 @@ class _Obs:
     pose: tuple[float, float, float]  # odometry (x, y, psi) at t
     inner_px: float | None = None  # [px] its inner edge where read apart from its extent
 
+    def across(self, cal: Calibration) -> bool:
+        """Whether the region spans the image centre's column."""
+        return self.u_left <= cal.cx_px <= self.u_right
+
     def inner_bearing(self, cal: Calibration, from_left: bool | None = None) -> float:
         """x / z of the region's inner edge (its column nearest the image centre; across
         the centre, with ``from_left`` known, its leading edge: the right one for a track
         that came from the left)."""
-        if from_left is not None and self.u_left <= cal.cx_px <= self.u_right:
+        if from_left is not None and self.across(cal):
             inner = self.u_right if from_left else self.u_left
         elif self.inner_px is not None:
             inner = self.inner_px
@@ -132,7 +136,7 @@ class Track:
         if not keep:
             return None
         for o in self.obs:
-            if not o.u_left <= cal.cx_px <= o.u_right:
+            if not o.across(cal):
                 return o.u_right < cal.cx_px
         return self.last_side
 
@@ -178,7 +182,7 @@ class BlobTracker:
             tr.obs.append(obs)
             if tr.first_psi is None:
                 tr.first_psi = pose[2]
-            if not obs.u_left <= self.cal.cx_px <= obs.u_right:
+            if not obs.across(self.cal):
                 tr.last_side = obs.u_right < self.cal.cx_px
             del tr.obs[: -c.window]
             tr.missed = 0
@@ -192,15 +196,14 @@ class BlobTracker:
         """(times (N,), odometry points (N, 2) of the inner edge, the latest region's extent
         [m] beyond its inner edge); None when a region lies across the image centre and
         the track's side is not known (``Track.side``), or, without ``extent``, touches
-        the image's side (cut there: where it ends is not
-        seen)."""
+        the image's side (cut there: where it ends is not seen)."""
         cal, c = self.cal, self.cfg
         cos_p = math.cos(math.radians(cal.pitch_deg))
         ts, pts = [], []
         side = tr.side(cal, c.turn_across)
         for o in tr.obs:
             cut = o.u_left <= 0 or o.u_right >= cal.width_px - 1
-            if (side is None and o.u_left <= cal.cx_px <= o.u_right) or (cut and not (c.cut_regions or c.extent)):
+            if (side is None and o.across(cal)) or (cut and not (c.cut_regions or c.extent)):
                 return None
             z = max(o.speed_mps * cos_p * max(t0 - o.t_s, c.min_ttc_s), o.contact_depth_m or 0.0, 0.5)
             fwd, left = z + cal.mount_forward_m, -o.inner_bearing(cal, side) * z
@@ -299,7 +302,7 @@ class BlobTracker:
         # extent (ego frame: left of the centre is + left)
         side = tr.side(cal, c.turn_across)
         last = tr.obs[-1]
-        across = side is not None and last.u_left <= cal.cx_px <= last.u_right  # spans out from its leading edge
+        across = side is not None and last.across(cal)  # it spans out from its leading edge
         outwards = (1.0 if side else -1.0) if across else (1.0 if last.u_right < cal.cx_px else -1.0)
         far = left + outwards * extent_m  # +-inf where the image's side cuts it
         lo, hi = np.minimum(left, far), np.maximum(left, far)

@@ -79,16 +79,16 @@ class TrackerConfig:
     # where it does not reach a fence's lowest counted rows (it floats); a track keeps the
     # side it came from when its region crosses the image centre; a region's height is
     # judged at the depth of the ground under it where that lies beyond the fence's static
-    # depth; association takes the
-    # ego's rotation out; a predicted region counts without reaching the lowest counted
-    # rows if it is as tall and as big as the largest fence asks. Off: the straight-road
-    # tracker of earlier releases
+    # depth; association takes the ego's rotation out; a predicted region counts without
+    # reaching the lowest counted rows if it is as tall and as big as the largest fence
+    # asks. Off: the straight-road tracker of earlier releases
     turn_across: bool = True
     # [m/s] with ``turn_across``, a region that does not reach a fence's lowest counted
     # rows (it floats: an oncoming car whose road shows beneath it) predicts only when it
     # comes towards the ego at least this fast along the ego's heading when its track
-    # began, and then along that heading only (oncoming traffic keeps its lane): a fenced fragment beside the
-    # road, placed at the ground's depth, would otherwise fit a fast sideways motion
+    # began, and then along that heading only (oncoming traffic keeps its lane): a fenced
+    # fragment beside the road, placed at the ground's depth, would otherwise fit a fast
+    # sideways motion
     float_closing_mps: float = 2.0
 
     def __post_init__(self) -> None:
