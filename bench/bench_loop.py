@@ -1,7 +1,7 @@
 """The closed loop's real-time factor per K, and where a frame's time goes.
 
 Usage: python bench/bench_loop.py [--scenario CCRs-50] [--ks 1 2 4 8 16] [--controller geofence]
-                                  [--turn-across on|off|both]
+                                  [--turn-across on|off|both] [--oncoming on|off|both]
 
 One run per K of the same case with the network-driven controller and ``measured``
 latency, all in this process, one after the other: per K, the real-time factor at the
@@ -11,7 +11,8 @@ footprint checks), per-actor truth, the per-pixel ground truth that the fence-la
 measurement needs (analysis only: a deployed loop would not compute it), the
 estimator and the controller's own logic. ``--turn-across both`` runs each K with the
 tracker's turn rules on and off, one after the other, and prints the ratio of the
-controller's own time (on / off). Prints the figures of this run; asserts nothing. Run it
+controller's own time (on / off); ``--oncoming both`` the same for its rules for oncoming
+traffic. Prints the figures of this run; asserts nothing. Run it
 alone: other jobs on a 2-core CPU inflate every figure.
 """
 
@@ -41,14 +42,17 @@ def main() -> None:
     ap.add_argument("--controller", default="geofence", choices=controllers.ESTIMATOR_CONTROLLERS)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--turn-across", choices=("on", "off", "both"), default="on")
+    ap.add_argument("--oncoming", choices=("on", "off", "both"), default="on")
     args = ap.parse_args()
-    turns = {"on": (True,), "off": (False,), "both": (True, False)}[args.turn_across]
+    both = {"on": (True,), "off": (False,), "both": (True, False)}
+    rules = [(t, o) for t in both[args.turn_across] for o in both[args.oncoming]]
     case = scenarios.resolve(args.scenario)[0]
     cam = CameraConfig()
     print(f"{args.scenario}, {args.controller}, latency measured, {cam.height_px}x{cam.width_px} at {cam.fps_hz:g} Hz")
     cols = (
         "K",
         "turn",
+        "oncoming",
         "frames",
         "jobs",
         "skipped",
@@ -64,8 +68,9 @@ def main() -> None:
     )
     print(("{:>9}" * len(cols)).format(*cols) + "   (ms per frame)")
     control_ms = {}
-    for k, turn in ((k, turn) for k in args.ks for turn in turns):
-        ctrl = controllers.make(args.controller, thresholds_s=default_thresholds(k), turn_across=turn)
+    for k, (turn, oncoming) in ((k, r) for k in args.ks for r in rules):
+        thr = default_thresholds(k)
+        ctrl = controllers.make(args.controller, thresholds_s=thr, turn_across=turn, oncoming=oncoming)
         sim = ScenarioSim(case, cam, args.seed, render=True)
         loop = ClosedLoop(
             sim,
@@ -85,21 +90,21 @@ def main() -> None:
         tm = loop.timing
         gt = tm.get("ground_truth_s", 0.0)
         per = [tm["render_s"], tm["traffic_s"], tm["truth_s"], gt, est_s, tm["controller_s"] - est_s, wall]
-        control_ms[k, turn] = 1e3 * per[5] / n
+        control_ms[k, turn, oncoming] = 1e3 * per[5] / n
+        onoff = ["on" if x else "off" for x in (turn, oncoming)]
         print(
-            ("{:>9}" * 5).format(
-                k, "on" if turn else "off", n, len(jobs), sum(r.status == "skipped" for r in loop.records)
-            )
+            ("{:>9}" * 6).format(k, *onoff, n, len(jobs), sum(r.status == "skipped" for r in loop.records))
             + f"{sim.t_s / wall:>9.2f}{sim.t_s / (wall - gt):>9.2f}"
             + ("{:>9.1f}" * len(per)).format(*(1e3 * x / n for x in per))
         )
 
-    for k in args.ks if len(turns) == 2 else ():
-        on, off = control_ms[k, True], control_ms[k, False]
-        print(
-            f"K = {k}: the controller's own logic {on:.2f} ms a frame with the turn rules, "
-            f"{off:.2f} without: {on / off:.2f}x"
-        )
+    for name, i in (("the turn rules", 0), ("the rules for oncoming traffic", 1)):
+        pairs = [(a, b) for a in rules for b in rules if a[i] and not b[i] and a[1 - i] == b[1 - i]]
+        for k in args.ks:
+            for a, b in pairs:
+                on, off = control_ms[(k, *a)], control_ms[(k, *b)]
+                ratio = f"{on:.2f} ms a frame with {name}, {off:.2f} without: {on / off:.2f}x"
+                print(f"K = {k}: the controller's own logic {ratio}")
 
 
 if __name__ == "__main__":

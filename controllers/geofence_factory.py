@@ -16,6 +16,7 @@ def _config(
     fovea_fences_from_s: float | None = None,
     road_edge_rows: int | None = None,
     turn_across: bool | None = None,
+    oncoming: bool | None = None,
 ) -> GeofenceConfig:
     thr = tuple(thresholds_s) if thresholds_s is not None else default_thresholds(4)
     kw = {} if frame_stride is None else {"frame_stride": frame_stride}
@@ -23,8 +24,9 @@ def _config(
         kw["fovea_fences_from_s"] = float(fovea_fences_from_s)
     if road_edge_rows is not None:
         kw["road_edge_rows"] = road_edge_rows
-    if turn_across is not None:
-        kw["tracker"] = TrackerConfig(turn_across=bool(turn_across))
+    tracker = {k: bool(v) for k, v in (("turn_across", turn_across), ("oncoming", oncoming)) if v is not None}
+    if tracker:
+        kw["tracker"] = TrackerConfig(**tracker)
     return GeofenceConfig(thresholds_s=thr, **kw)
 
 
@@ -39,6 +41,7 @@ def make_geofence(
     fovea_fences_from_s: float | None = None,
     road_edge_rows: int | None = None,
     turn_across: bool | None = None,
+    oncoming: bool | None = None,
 ) -> GeofenceController:
     """The shipped network (or ``weights``) behind the geofence controller; ``backend=
     "onnxruntime", onnx=DIR``: the same weights exported to ``DIR`` (checked against them)."""
@@ -49,7 +52,7 @@ def make_geofence(
         est = make_estimator("bittc", weights=weights or DEFAULT_WEIGHTS, backend=backend, onnx=onnx)
     else:
         est = make_estimator("bittc", weights=weights, device=device, backend=backend, onnx=onnx)
-    cfg = _config(thresholds_s, frame_stride, fovea_fences_from_s, road_edge_rows, turn_across)
+    cfg = _config(thresholds_s, frame_stride, fovea_fences_from_s, road_edge_rows, turn_across, oncoming)
     return GeofenceController(est, cfg, name=name)
 
 
@@ -60,11 +63,12 @@ def make_flow(
     fovea_fences_from_s: float | None = None,
     road_edge_rows: int | None = None,
     turn_across: bool | None = None,
+    oncoming: bool | None = None,
 ) -> GeofenceController:
     """The DIS + affine-expansion baseline behind the same controller logic."""
     from bittc_core.estimator import make_estimator
 
-    cfg = _config(thresholds_s, frame_stride, fovea_fences_from_s, road_edge_rows, turn_across)
+    cfg = _config(thresholds_s, frame_stride, fovea_fences_from_s, road_edge_rows, turn_across, oncoming)
     return GeofenceController(make_estimator("flow"), cfg, name=name)
 
 
@@ -75,9 +79,10 @@ def make_geofence_exact(
     fovea_fences_from_s=None,
     road_edge_rows: int | None = None,
     turn_across: bool | None = None,
+    oncoming: bool | None = None,
 ) -> GeofenceController:
     """The same policy on the exact fences of the per-pixel ground truth (not deployable)."""
     from controllers.geofence_exact import ExactFenceController
 
-    cfg = _config(thresholds_s, frame_stride, fovea_fences_from_s, road_edge_rows, turn_across)
+    cfg = _config(thresholds_s, frame_stride, fovea_fences_from_s, road_edge_rows, turn_across, oncoming)
     return ExactFenceController(cfg, name=name)

@@ -75,6 +75,9 @@ class PathPrediction:
         # with check views asked for, a camera that has none of them predicts nothing
         checked = t.predict_unchecked or not t.check_views or any(v in cals for v in t.check_views)
         self.views = tuple(v for v in cals if t.enabled and checked and (v in t.views or v in t.check_views))
+        # views that predict: the tracker's, and with the oncoming rules the check views,
+        # whose floating tracks alone predict (``floating_only``)
+        self.floating_only = tuple(v for v in t.check_views if t.oncoming and t.turn_across and v not in t.views)
         self.trackers = {v: BlobTracker(t, cals[v]) for v in self.views}
         self.ground_depth = {v: ground_depth_per_row(cals[v]) for v in self.views}
         self.odometry = Odometry()
@@ -127,20 +130,27 @@ class PathPrediction:
             blobs = [self._largest_fence_edge(b, parts, cal) for b in blobs]
         tracks = self.trackers[view].update(t_s, self.pose, speed_mps, blobs)
         for blob, track in zip(blobs, tracks):
-            track.floating = not (blob.mask & standing).any()
+            # a track of a view that predicts only floating tracks stays floating: an
+            # oncoming car's region reaches the counted rows once it is near
+            keep = view in self.floating_only and track.floating
+            track.floating = keep or not (blob.mask & standing).any()
         self._seen[view] = list(zip(blobs, tracks))
 
     def predicted(self, view: str, shape: tuple[int, int], t_s: float, speed_mps: float, yaw_rate: float):
         """(H, W) bool: this job's regions of ``view`` predicted into the ego's path."""
         out = np.zeros(shape, dtype=bool)
-        if view not in self.views or view not in self.cfg.tracker.views:
+        if view not in self.views or view not in self.cfg.tracker.views + self.floating_only:
             return out
         t, cal = self.cfg.tracker, self.cals[view]
         tracker = self.trackers[view]
         for blob, track in self._seen.get(view, []):
+            if view in self.floating_only and not track.floating:
+                continue
             if tracker.in_path(track, t_s, self.pose, speed_mps, yaw_rate):
                 # a road user's width at most: a held stretch of scenery would pass the persistence
                 track.held = 1 + (t.hold_jobs if track.width_m(cal) <= t.road_user_width_m else 0)
+            elif track.held > 0 and tracker.oncoming(track) and track.obs[-1].across(cal):
+                track.held = 1 + t.hold_jobs  # an oncoming car predicted into the path, now ahead
             elif track.held > 0 and not tracker.closing_in(track, track.contact_time_s()):
                 track.held = 0  # its bearing moves out now: nothing to hold
             if track.held > 0 and not self._refuted(view, track):

@@ -3,64 +3,49 @@
 A pedestrian crossing ahead is inside the 1.6 s fence long before it is in the ego's
 corridor, and many walk clear. The tracker decides from what the car has: the fenced
 regions of each job (``controllers.evidence.Blob``), the ego's speed and yaw rate, and
-the calibration.
-
-Per job and view:
+the calibration. The rules and their measurements: docs/vru.md. Per job and view:
 
 1. **Associate**: each region goes to the track whose last region's column centre is
    nearest, within ``gate_frac`` of the wider of the two (at least ``min_gate_px``);
    the others start tracks. A track without a region for ``max_missed`` jobs ends.
 2. **Time and depth**: a region inside fence tau_i at t_j reaches the camera plane by
-   t_j + tau_i (if it closes at the ego's speed: a static or crossing target). A track's
-   contact time t0 is the earliest such bound over its history, and its depth at t_k is
-   the static depth of the TTC left then, Z_k = s cos p (t0 - t_k) (at least
-   ``min_ttc_s``). Every observation is re-placed with the current t0, so a tighter
-   bound rescales the whole history at once instead of making a jump in it. Where the
-   ground under a region shows (the road below it lies outside the fence: it closes
-   faster than the ego drives, an oncoming car), that ground's depth is used when it is
-   the larger: the static depth would put such a car nearer and so nearer the path.
-3. **Ground motion**: each region's inner edge (the column nearest the image centre, read
-   on the largest fence that holds part of it: ``edge_from_largest``) at Z_k, moved into
-   one odometry frame by dead reckoning from the ego's speed and yaw rate, gives the
-   target's velocity over the ground by a least-squares line over the last ``window``
-   jobs. A region across the centre is in the corridor now: the corridor
-   rule of ``controllers.geofence`` judges it. A region cut by the image's side (its
-   outer edge and centre move with the cut) predicts nothing, unless ``cut_regions`` or
-   ``extent``.
-4. **Predict**: the ego keeps its speed and yaw rate; the target keeps its velocity.
-   Sampled every ``step_s`` up to the track's TTC plus ``horizon_pad_s``: does the
-   target (its inner edge, ``target_half_length_m`` along the ego; with ``extent``, also
-   from its inner edge outwards by its region's width at its depth, or without end where
-   the image's side cuts it: a crossing car whose front has passed the path's centre
-   still blocks it with its body) overlap the ego's footprint widened by ``margin_m``
-   each side? Only a track whose inner edge's bearing (the ego's rotation taken out)
-   comes in or holds predicts (with ``corridor_allowance``, also one that moves out no
-   faster than an edge that meets the camera plane inside the corridor): beside the
-   path a standing object's bearing moves out as the ego approaches, at any depth, so no
-   error of the depth (the fences' TTC bounds are coarse) can bring it in. Tracks with
-   fewer than ``min_hits`` regions, a ground speed above ``max_speed_mps`` (a bad
-   association) or below ``min_speed_mps`` (standing: the corridor rule judges it; a
-   turning ego's arc, held beyond the turn, would sweep the kerbs and houses on its
-   inside) predict nothing.
-5. **Hold**: a track predicted into the path that is no wider than ``road_user_width_m``
-   (a road user) keeps counting for ``hold_jobs`` more jobs while its bearing still comes
-   in (``controllers.path_prediction``): the inner edge of a crossing cyclist, a few
-   pixels of its rider, swings the fitted crossing point by metres from job to job, and
-   the fence needs consecutive jobs to fire.
+   t_j + tau_i. A track's contact time t0 is the earliest such bound over its history,
+   and its depth at t_k the static depth of the TTC left then, Z_k = s cos p (t0 - t_k)
+   (at least ``min_ttc_s``), re-placed with every tighter t0. Where the ground under a
+   region shows (it closes faster than the ego drives: an oncoming car), that ground's
+   depth is used when it is the larger.
+3. **Ground motion**: each region's inner edge (the column nearest the image centre, on
+   the largest fence that holds part of it: ``edge_from_largest``) at Z_k, in one
+   odometry frame by dead reckoning, gives the target's velocity over the ground by a
+   least-squares line over the last ``window`` jobs. A region across the centre is the
+   corridor rule's (``controllers.geofence``); one cut by the image's side predicts
+   nothing, unless ``cut_regions`` or ``extent``.
+4. **Predict**: the ego keeps its speed and yaw rate, the target its velocity; sampled
+   every ``step_s`` up to the track's TTC plus ``horizon_pad_s``, does the target (its
+   inner edge, ``target_half_length_m`` along the ego; with ``extent`` also its width
+   outwards) overlap the ego's footprint widened by ``margin_m`` each side? Only a track
+   whose inner edge's bearing (the ego's rotation taken out) comes in or holds predicts
+   (with ``corridor_allowance``, also one that moves out no faster than an edge met
+   inside the corridor): beside the path a standing object's bearing moves out as the
+   ego approaches, at any depth, so no error of the coarse depth can bring it in. Tracks
+   with fewer than ``min_hits`` regions, a ground speed above ``max_speed_mps`` (a bad
+   association) or below ``min_speed_mps`` (standing: the corridor rule judges it)
+   predict nothing.
+5. **Hold**: a predicted track no wider than ``road_user_width_m`` keeps counting for
+   ``hold_jobs`` more jobs while its bearing still comes in
+   (``controllers.path_prediction``): a crossing cyclist's few pixels of edge swing the
+   fitted crossing point by metres from job to job.
 
-With ``turn_across`` (a turn across an oncoming car's path, decided on the yaw rate
-alone): association compares columns with the ego's rotation since a track's last region
-taken out (a turning ego sweeps the world sideways by fx per radian); a track whose region
-comes to lie across the image centre keeps the side it came from, and its leading edge
-(the right one for a track from the left) stands in for its inner edge in steps 3 and 4;
-a track whose region floats (``Track.floating``: it does not reach a fence's lowest
-counted rows) predicts only when it comes towards the ego at ``float_closing_mps`` or
-faster along the ego's heading when the track began (``Track.first_psi``: before the turn,
-for a car tracked as it comes), and then moves along that heading only (oncoming traffic
-keeps its lane).
-
-The regions, and the fovea's check of the wide view's bearing test:
-``controllers.path_prediction``.
+With ``turn_across``: association takes out the ego's rotation since a track's last
+region; a track whose region comes to lie across the image centre keeps the side it came
+from, placed by its leading edge; a track whose region floats (``Track.floating``: it
+does not reach a fence's lowest counted rows) predicts only when it comes towards the ego
+at ``float_closing_mps`` or faster along the ego's heading when the track began
+(``Track.first_psi``), and then along that heading only (oncoming traffic keeps its
+lane). With ``oncoming`` as well (``BlobTracker.oncoming``), such a track may move at up
+to ``oncoming_max_speed_mps``, predicts by its leading edge where the image's side cuts
+its region, and is fitted on its regions with the ground's depth under them only (at
+least ``min_hits``); the fovea's floating tracks predict too (``controllers.path_prediction``).
 
 Odometry (``controllers.path_prediction.Odometry``): x [m] forward and y [m] left of the
 ego's footprint centre at the run's start, heading psi [rad]. Camera frame to ego frame:
@@ -201,19 +186,28 @@ class BlobTracker:
         cos_p = math.cos(math.radians(cal.pitch_deg))
         ts, pts = [], []
         side = tr.side(cal, c.turn_across)
+        oncoming = self.oncoming(tr)
         for o in tr.obs:
             cut = o.u_left <= 0 or o.u_right >= cal.width_px - 1
-            if (side is None and o.across(cal)) or (cut and not (c.cut_regions or c.extent)):
+            if (side is None and o.across(cal)) or (cut and not (c.cut_regions or c.extent or oncoming)):
                 return None
+            if oncoming and not o.contact_depth_m:  # its depth at the ego's speed: far too near
+                continue
             z = max(o.speed_mps * cos_p * max(t0 - o.t_s, c.min_ttc_s), o.contact_depth_m or 0.0, 0.5)
             fwd, left = z + cal.mount_forward_m, -o.inner_bearing(cal, side) * z
             x, y, psi = o.pose
             pts.append((x + fwd * math.cos(psi) - left * math.sin(psi), y + fwd * math.sin(psi) + left * math.cos(psi)))
             ts.append(o.t_s)
+        if len(ts) < c.min_hits:  # an oncoming track's regions with the ground under them
+            return None
         # the lateral extent [m] beyond the inner edge: the region's width at its depth, or
         # unbounded where the image's side cuts it
         extent = math.inf if cut else (o.u_right - o.u_left + 1) / cal.fx_px * z
         return np.asarray(ts), np.asarray(pts), extent if c.extent else 0.0
+
+    def oncoming(self, tr: Track) -> bool:
+        """Whether ``tr`` moves by the rules for oncoming traffic (``TrackerConfig.oncoming``)."""
+        return self.cfg.oncoming and self.cfg.turn_across and tr.floating
 
     def closing_in(self, tr: Track, t0: float) -> bool:
         """Whether the inner edge's bearing, with the ego's own rotation taken out, moves
@@ -272,7 +266,8 @@ class BlobTracker:
         A = np.stack([np.ones_like(ts), ts - tm], axis=1)
         coef, *_ = np.linalg.lstsq(A, pts, rcond=None)
         vel = coef[1]
-        if not c.min_speed_mps <= float(np.hypot(*vel)) <= c.max_speed_mps:
+        top = c.oncoming_max_speed_mps if self.oncoming(tr) else c.max_speed_mps
+        if not c.min_speed_mps <= float(np.hypot(*vel)) <= top:
             return False
         if c.turn_across and tr.floating:  # oncoming, keeping its lane, or nothing
             # the oncoming lane runs along the ego's heading when the track began: before the

@@ -90,6 +90,19 @@ class TrackerConfig:
     # fragment beside the road, placed at the ground's depth, would otherwise fit a fast
     # sideways motion
     float_closing_mps: float = 2.0
+    # with ``turn_across``, the rules for a floating track as oncoming traffic (docs/vru.md,
+    # "An oncoming car in the fovea"): the fovea predicts its floating tracks too, and a
+    # fovea track that floated stays so (the wide view fences a car oncoming at 60 km/h
+    # only from a TTC of 0.7 s, the fovea from 2 s); a floating track's region cut by the
+    # image's side predicts by its leading edge; its motion is fitted on the regions with
+    # the ground's depth under them (elsewhere the depth is the fence's TTC at the ego's
+    # speed, far too near for a car that closes faster); it may move at up to
+    # ``oncoming_max_speed_mps``; once predicted, it keeps predicting while its region
+    # lies across the image centre. Off: floating tracks predict in the wide view alone
+    oncoming: bool = True
+    # [m/s] a floating track's ground speed bound (``max_speed_mps`` is a road user's): a car
+    # oncoming at 60 km/h, fitted on depths that err by metres from job to job
+    oncoming_max_speed_mps: float = 40.0
 
     def __post_init__(self) -> None:
         ok = (
@@ -112,6 +125,7 @@ class TrackerConfig:
             and self.road_user_width_m >= 0
             and self.check_tol_px >= 0
             and self.float_closing_mps >= 0
+            and self.oncoming_max_speed_mps >= self.max_speed_mps
         )
         if not ok:
             raise ValueError(f"TrackerConfig out of range: {self}")

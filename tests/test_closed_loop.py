@@ -105,7 +105,8 @@ def test_make_refuses_unknown_settings_and_non_controllers():
         (["--controller", "oracle", "--num-alphas", "4"], "not 'oracle'"),
         (["--controller", "geofence", "--road-edge-rows", "-1"], "--road-edge-rows -1: must be an integer >= 0"),
         (["--controller", "oracle", "--road-edge-rows", "3"], "not 'oracle'"),
-        (["--controller", "oracle", "--no-turn-across"], "--[no-]turn-across apply to"),
+        (["--controller", "oracle", "--no-turn-across"], "--[no-]turn-across / --[no-]oncoming apply to"),
+        (["--controller", "oracle", "--no-oncoming"], "--[no-]oncoming apply to"),
     ],
 )
 def test_bad_input_is_refused_by_name_and_nothing_is_written(tmp_path, capsys, extra, needle):

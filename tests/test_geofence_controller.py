@@ -150,6 +150,9 @@ def test_the_road_edge_settings_are_checked_and_reach_the_controllers():
         assert controllers.make(name, road_edge_rows=3).cfg.road_edge_rows == 3
         assert controllers.make(name, turn_across=False).cfg.tracker.turn_across is False
         assert controllers.make(name).cfg.tracker.turn_across is True
+        assert controllers.make(name, oncoming=False).cfg.tracker.oncoming is False
+        assert controllers.make(name, oncoming=False).cfg.tracker.turn_across is True
+        assert controllers.make(name).cfg.tracker.oncoming is True
     for bad in (-2, True, 1.5):
         with pytest.raises(ConfigError, match="road_edge_rows"):
             GeofenceConfig(road_edge_rows=bad)

@@ -71,6 +71,12 @@ def add_controller_flags(p: argparse.ArgumentParser, default: str | None = None)
         default=None,
         help="geofence/flow: the tracker's rules for a turn across an oncoming car's path (docs/vru.md; default on)",
     )
+    p.add_argument(
+        "--oncoming",
+        action=argparse.BooleanOptionalAction,
+        default=None,
+        help="geofence/flow: the tracker's rules for oncoming traffic, in the fovea too (docs/vru.md; default on)",
+    )
     from sim.cli.common import add_backend_flags
 
     add_backend_flags(p)
@@ -112,6 +118,8 @@ def controller_from_args(args, camera):
         settings["road_edge_rows"] = args.road_edge_rows
     if args.turn_across is not None:
         settings["turn_across"] = args.turn_across
+    if args.oncoming is not None:
+        settings["oncoming"] = args.oncoming
     if args.weights is not None:
         if name != "geofence":
             raise CliError(f"--weights applies to the geofence controller, not {name!r}")
@@ -125,7 +133,7 @@ def controller_from_args(args, camera):
     if settings and name in controllers.REGISTRY and not takes_fences:
         raise CliError(
             "--num-alphas / --ttc-thresholds / --frame-stride / --fovea-fences-from / --road-edge-rows / "
-            f"--[no-]turn-across apply to "
+            f"--[no-]turn-across / --[no-]oncoming apply to "
             f"{' and '.join(controllers.ESTIMATOR_CONTROLLERS)}, not {name!r}"
         )
     try:
