@@ -181,7 +181,9 @@ class BlobTracker:
         """(times (N,), odometry points (N, 2) of the inner edge, the latest region's extent
         [m] beyond its inner edge); None when a region lies across the image centre and
         the track's side is not known (``Track.side``), or, without ``extent``, touches
-        the image's side (cut there: where it ends is not seen)."""
+        the image's side (cut there: where it ends is not seen). An oncoming track
+        (``oncoming``) is placed by its cut regions too, but only by its regions with the
+        ground's depth under them, of which it needs ``min_hits``."""
         cal, c = self.cal, self.cfg
         cos_p = math.cos(math.radians(cal.pitch_deg))
         ts, pts = [], []
@@ -198,11 +200,11 @@ class BlobTracker:
             x, y, psi = o.pose
             pts.append((x + fwd * math.cos(psi) - left * math.sin(psi), y + fwd * math.sin(psi) + left * math.cos(psi)))
             ts.append(o.t_s)
+            # the lateral extent [m] beyond the inner edge: the region's width at its depth,
+            # or unbounded where the image's side cuts it (the latest region placed)
+            extent = math.inf if cut else (o.u_right - o.u_left + 1) / cal.fx_px * z
         if len(ts) < c.min_hits:  # an oncoming track's regions with the ground under them
             return None
-        # the lateral extent [m] beyond the inner edge: the region's width at its depth, or
-        # unbounded where the image's side cuts it
-        extent = math.inf if cut else (o.u_right - o.u_left + 1) / cal.fx_px * z
         return np.asarray(ts), np.asarray(pts), extent if c.extent else 0.0
 
     def oncoming(self, tr: Track) -> bool:

@@ -125,7 +125,7 @@ class TrackerConfig:
             and self.road_user_width_m >= 0
             and self.check_tol_px >= 0
             and self.float_closing_mps >= 0
-            and self.oncoming_max_speed_mps >= self.max_speed_mps
+            and self.oncoming_max_speed_mps > 0
         )
         if not ok:
             raise ValueError(f"TrackerConfig out of range: {self}")

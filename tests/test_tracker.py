@@ -1,6 +1,8 @@
 """The tracker predicts which fenced regions enter the ego's path (synthetic regions from a
 pinhole projection of targets moving in closed form)."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -42,6 +44,28 @@ def _run(lateral_m, lateral_speed_mps, width_m=0.5, depth0_m=30.0, jobs=12, cfg=
         (track,) = tracker.update(t, pose, SPEED_MPS, [blob])
         out.append(tracker.in_path(track, t, pose, SPEED_MPS, 0.0))
     return out
+
+
+def _closing(cfg, v_along_mps, x0_m, vx_mps=0.0, floating=True, no_ground=(), cut_from=None, jobs=8, depth0_m=40.0):
+    """Whether the tracker predicts into the path, at the last job, a target 1.8 m wide
+    whose left edge starts ``x0_m`` right of the camera (camera x), coming towards the ego
+    along its heading at ``v_along_mps`` and moving right at ``vx_mps``, its region
+    ``floating`` or standing. The ground under it shows (its depth known) but in the jobs
+    ``no_ground``; from job ``cut_from`` on its region runs out of the image's right side."""
+    cal = _cal()
+    tracker, odo = BlobTracker(cfg, cal), Odometry()
+    closing = SPEED_MPS + v_along_mps
+    for k in range(jobs):
+        t = 0.1 * k
+        pose = odo.update(t, SPEED_MPS, 0.0)
+        z, x = depth0_m - closing * t, x0_m + vx_mps * t
+        ground = None if k in no_ground else z
+        blob = dataclasses.replace(_blob(cal, x, x + 1.8, z, z / closing), contact_depth_m=ground)
+        if cut_from is not None and k >= cut_from:
+            blob = dataclasses.replace(blob, u_right=cal.width_px - 1.0)
+        (track,) = tracker.update(t, pose, SPEED_MPS, [blob])
+        track.floating = floating
+    return tracker.in_path(track, t, pose, SPEED_MPS, 0.0)
 
 
 def test_a_pedestrian_stepping_into_the_path_is_predicted_in_path_once_tracked():

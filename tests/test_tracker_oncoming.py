@@ -1,38 +1,20 @@
 """The tracker's rules for oncoming traffic (``TrackerConfig.oncoming``), on synthetic
 regions of a car oncoming in the ego's path from a pinhole projection in closed form."""
 
-import dataclasses
-
 import numpy as np
 
 from controllers.geofence_config import GeofenceConfig
-from controllers.path_prediction import Odometry, PathPrediction
+from controllers.path_prediction import PathPrediction
 from controllers.tracker import BlobTracker, TrackerConfig
-from tests.test_tracker import SPEED_MPS, THRESHOLDS_S, _blob, _cal
+from tests.test_tracker import SPEED_MPS, THRESHOLDS_S, _cal, _closing
 
 OFF = TrackerConfig(oncoming=False)
 
 
-def _oncoming(cfg, v_mps=8.0, x0_m=0.3, vx_mps=0.0, no_ground=(), cut_from=None, jobs=8, depth0_m=40.0):
-    """Whether the tracker predicts into the path, at the last job, a floating car 1.8 m
-    wide whose left edge starts ``x0_m`` right of the camera, oncoming at ``v_mps`` along
-    the ego's heading and moving right at ``vx_mps``. Jobs in ``no_ground`` show no ground
-    under it (no contact depth); from job ``cut_from`` on its region runs out of the
-    image's right side."""
-    cal = _cal()
-    tracker, odo = BlobTracker(cfg, cal), Odometry()
-    closing = SPEED_MPS + v_mps
-    for k in range(jobs):
-        t = 0.1 * k
-        pose = odo.update(t, SPEED_MPS, 0.0)
-        z, x = depth0_m - closing * t, x0_m + vx_mps * t
-        blob = _blob(cal, x, x + 1.8, z, z / closing)
-        blob = dataclasses.replace(blob, contact_depth_m=None if k in no_ground else z)
-        if cut_from is not None and k >= cut_from:
-            blob = dataclasses.replace(blob, u_right=cal.width_px - 1.0)
-        (track,) = tracker.update(t, pose, SPEED_MPS, [blob])
-        track.floating = True
-    return tracker.in_path(track, t, pose, SPEED_MPS, 0.0)
+def _oncoming(cfg, v_mps=8.0, x0_m=0.3, vx_mps=0.0, no_ground=(), cut_from=None):
+    """A floating car 1.8 m wide oncoming at ``v_mps`` (``tests.test_tracker._closing``):
+    predicted into the path at the last of 8 jobs?"""
+    return _closing(cfg, v_mps, x0_m, vx_mps, floating=True, no_ground=no_ground, cut_from=cut_from)
 
 
 def test_an_oncoming_car_may_move_faster_than_a_road_user():
@@ -62,10 +44,12 @@ def test_an_oncoming_car_cut_by_the_image_side_predicts_by_its_leading_edge():
     assert not _oncoming(OFF, x0_m=1.5, vx_mps=-1.0, cut_from=4)
 
 
-def _fovea_predictions(oncoming: bool, standing: bool) -> list[bool]:
+def _fovea_predictions(oncoming: bool, standing: bool, stands_from: int = 99, across_from: int = 99) -> list[bool]:
     """Per job, whether the fovea's regions count as predicted: a box inside every fence
     that comes nearer (down and wider) job by job, floating above the counted rows
-    (``standing``: reaching their lowest row), in a camera whose two views are alike."""
+    (``standing``: reaching their lowest row; from job ``stands_from`` on), right of the
+    image centre (from job ``across_from`` on, across it), in a camera whose two views
+    are alike."""
     cal = _cal()
     h, w = cal.height_px, cal.width_px
     thr = np.asarray(THRESHOLDS_S)
@@ -80,8 +64,9 @@ def _fovea_predictions(oncoming: bool, standing: bool) -> list[bool]:
         paths.start_job(t, SPEED_MPS, 0.0)
         maps = np.zeros((len(thr), h, w), np.float32)
         half = 6 + k  # [px] it grows as it nears, centred right of the image centre
-        bottom = 60 + 2 * k if not standing else 89
-        maps[:, 45 : bottom + 1, int(cal.cx_px) + 2 : int(cal.cx_px) + 2 + 2 * half] = 1.0
+        bottom = 89 if standing or k >= stands_from else 60 + 2 * k
+        left = int(cal.cx_px) + (2 if k < across_from else -4)
+        maps[:, 45 : bottom + 1, left : left + 2 * half] = 1.0
         for view in ("wide", "fovea"):
             paths.observe(view, maps, thr, bands, SPEED_MPS, t)
         out.append(bool(paths.predicted("fovea", (h, w), t, SPEED_MPS, 0.0).any()))
@@ -93,4 +78,16 @@ def test_the_fovea_predicts_its_floating_tracks_only():
     assert PathPrediction(GeofenceConfig(thresholds_s=THRESHOLDS_S), two_views).floating_only == ("fovea",)
     assert not any(_fovea_predictions(oncoming=False, standing=False))
     assert not any(_fovea_predictions(oncoming=True, standing=True))
-    assert any(_fovea_predictions(oncoming=True, standing=False))
+    assert _fovea_predictions(oncoming=True, standing=False) == [False] * 2 + [True] * 6
+    # a fovea track that floated stays floating when its region comes to reach the rows
+    assert _fovea_predictions(oncoming=True, standing=False, stands_from=5) == [False] * 2 + [True] * 6
+
+
+def test_a_predicted_oncoming_car_across_the_centre_stays_predicted(monkeypatch):
+    # from job 4 on its region spans the image centre and its prediction is made to fail:
+    # it is ahead now, and stays predicted while it lies across the centre
+    in_path = BlobTracker.in_path
+    monkeypatch.setattr(BlobTracker, "in_path", lambda self, tr, t_s, *a: t_s < 0.35 and in_path(self, tr, t_s, *a))
+    assert _fovea_predictions(oncoming=True, standing=False, across_from=4) == [False] * 2 + [True] * 6
+    # beside the centre it is held for hold_jobs (2) more jobs only
+    assert _fovea_predictions(oncoming=True, standing=False) == [False] * 2 + [True] * 4 + [False] * 2

@@ -10,7 +10,7 @@ from controllers.evidence import in_path_evidence
 from controllers.geofence_config import GeofenceConfig
 from controllers.path_prediction import Odometry, PathPrediction
 from controllers.tracker import BlobTracker, TrackerConfig
-from tests.test_tracker import SPEED_MPS, THRESHOLDS_S, _blob, _cal, _run
+from tests.test_tracker import SPEED_MPS, THRESHOLDS_S, _blob, _cal, _closing, _run
 
 OFF = TrackerConfig(turn_across=False)
 
@@ -45,21 +45,8 @@ def _blob_at(cal, u_left_px, width_px):
     return dataclasses.replace(_blob(cal, -1.5, -1.0, 20.0, 2.0), u_left=u_left_px, u_right=u_left_px + width_px)
 
 
-def _floating(x0_m, vx_mps, v_along_mps, floating, jobs=12, depth0_m=40.0):
-    """In-path predictions at the last job of a target whose left edge starts ``x0_m``
-    right of the camera (camera x), moving right at ``vx_mps`` and towards the ego along
-    its heading at ``v_along_mps``, with the ground under it showing (its depth known)."""
-    cal, cfg = _cal(), TrackerConfig()
-    tracker, odo = BlobTracker(cfg, cal), Odometry()
-    closing = SPEED_MPS + v_along_mps
-    for k in range(jobs):
-        t = 0.1 * k
-        pose = odo.update(t, SPEED_MPS, 0.0)
-        z, x = depth0_m - closing * t, x0_m + vx_mps * t
-        blob = dataclasses.replace(_blob(cal, x, x + 1.8, z, z / closing), contact_depth_m=z)
-        (track,) = tracker.update(t, pose, SPEED_MPS, [blob])
-        track.floating = floating
-    return tracker.in_path(track, t, pose, SPEED_MPS, 0.0)
+def _floating(x0_m, vx_mps, v_along_mps, floating):
+    return _closing(TrackerConfig(), v_along_mps, x0_m, vx_mps, floating=floating, jobs=12)
 
 
 def test_a_floating_region_predicts_only_as_oncoming_traffic_in_its_lane():

@@ -75,7 +75,7 @@ def add_controller_flags(p: argparse.ArgumentParser, default: str | None = None)
         "--oncoming",
         action=argparse.BooleanOptionalAction,
         default=None,
-        help="geofence/flow: the tracker's rules for oncoming traffic, in the fovea too (docs/vru.md; default on)",
+        help="geofence/flow: with the turn rules, the tracker's rules for oncoming traffic (docs/vru.md; default on)",
     )
     from sim.cli.common import add_backend_flags
 
