@@ -124,11 +124,7 @@ class PathPrediction:
             touch = inside
         depths = np.array([max(static_depth_m(cal, speed_mps, tau), 1e-6) for tau in thr])
         pad = np.ceil(cal.fx_px * t.contact_pad_m / depths)
-        oncoming = t.oncoming and t.turn_across
-        least = c.min_region_px if oncoming else need
-        found = fenced_blobs(inside, touch, maps, thr, c.prob_inside, least, self.ground_depth[view], t.join_rows, pad)
-        if oncoming:  # a floating region's size is judged at the ground's depth under it, where further
-            found = [b for b in found if b.mask.sum() >= self._need(b, standing, need, cal, speed_mps, thr[-1])]
+        found = fenced_blobs(inside, touch, maps, thr, c.prob_inside, need, self.ground_depth[view], t.join_rows, pad)
         blobs = [b for b in found if self._upright(b, cal, speed_mps)]
         if t.edge_from_largest:
             blobs = [self._largest_fence_edge(b, parts, cal) for b in blobs]
@@ -202,17 +198,6 @@ class PathPrediction:
                 inner = cols.max() if blob.u_right < cal.cx_px else cols.min()
                 return dataclasses.replace(blob, inner_px=float(inner))
         return blob
-
-    def _need(self, blob: Blob, standing: np.ndarray, need: float, cal: Calibration, speed_mps: float, largest_s):
-        """[px] the size a region must have: ``need`` (a face of ``min_face_m2`` at the largest
-        fence's static depth), or for a floating region with the ground showing beyond that
-        depth under it, the same face at the ground's depth (an oncoming car 40 m away while
-        the static depth at 15 km/h is 12 m)."""
-        c = self.cfg
-        if (blob.mask & standing).any() or not blob.contact_depth_m:
-            return need
-        depth = max(static_depth_m(cal, speed_mps, largest_s), blob.contact_depth_m)
-        return need_px(cal, depth, c.min_region_px, c.min_face_m2)
 
     def _upright(self, blob: Blob, cal: Calibration, speed_mps: float) -> bool:
         """Whether a fenced region stands up like a road user, not flat on the ground: it

@@ -45,8 +45,7 @@ at ``float_closing_mps`` or faster along the ego's heading when the track began
 lane). With ``oncoming`` as well (``BlobTracker.oncoming``), such a track may move at up
 to ``oncoming_max_speed_mps``, predicts by its leading edge where the image's side cuts
 its region, and is fitted on its regions with the ground's depth under them only (at
-least ``min_hits``); the fovea's floating tracks predict too, and a floating region's size
-is judged at the ground's depth under it (``controllers.path_prediction``).
+least ``min_hits``); the fovea's floating tracks predict too (``controllers.path_prediction``).
 
 Odometry (``controllers.path_prediction.Odometry``): x [m] forward and y [m] left of the
 ego's footprint centre at the run's start, heading psi [rad]. Camera frame to ego frame:

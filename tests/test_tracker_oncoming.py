@@ -91,29 +91,3 @@ def test_a_predicted_oncoming_car_across_the_centre_stays_predicted(monkeypatch)
     assert _fovea_predictions(oncoming=True, standing=False, across_from=4) == [False] * 2 + [True] * 6
     # beside the centre it is held for hold_jobs (2) more jobs only
     assert _fovea_predictions(oncoming=True, standing=False) == [False] * 2 + [True] * 4 + [False] * 2
-
-
-def _kept(oncoming: bool, speed_mps: float) -> int:
-    """How many regions ``observe`` keeps of a 10 x 15 px box inside every fence, floating
-    15 rows above the counted rows (40-89) with the ground under it outside every fence."""
-    cal = _cal()
-    h, w = cal.height_px, cal.width_px
-    thr = np.asarray(THRESHOLDS_S)
-    maps = np.zeros((len(thr), h, w), np.float32)
-    maps[:, 60:75, 150:160] = 1.0
-    bands = [np.zeros((h, w), bool) for _ in thr]
-    for b in bands:
-        b[40:90] = True
-    tracker = TrackerConfig(oncoming=oncoming, predict_unchecked=True)
-    paths = PathPrediction(GeofenceConfig(thresholds_s=THRESHOLDS_S, tracker=tracker), {"wide": cal})
-    paths.start_job(0.0, speed_mps, 0.0)
-    paths.observe("wide", maps, thr, bands, speed_mps, 0.0)
-    return len(paths._seen["wide"])
-
-
-def test_a_floating_region_s_size_is_judged_where_its_ground_lies():
-    # at 2 m/s the 2.8 s fence's static depth is 5.6 m, where a face of 0.3 m^2 covers
-    # about 300 px; the ground under the box lies 8.5 m away, where about 130 px suffice
-    assert _kept(oncoming=True, speed_mps=2.0) == 1
-    assert _kept(oncoming=False, speed_mps=2.0) == 0
-    assert _kept(oncoming=False, speed_mps=SPEED_MPS) == 1  # at 40 km/h it is big enough anyway
