@@ -77,7 +77,7 @@ class PathPrediction:
         self.views = tuple(v for v in cals if t.enabled and checked and (v in t.views or v in t.check_views))
         # views that predict: the tracker's, and with the oncoming rules the check views,
         # whose floating tracks alone predict (``floating_only``)
-        self.floating_only = tuple(v for v in t.check_views if t.oncoming and t.turn_across and v not in t.views)
+        self.floating_only = tuple(v for v in t.check_views if t.oncoming_rules and v not in t.views)
         self.trackers = {v: BlobTracker(t, cals[v]) for v in self.views}
         self.ground_depth = {v: ground_depth_per_row(cals[v]) for v in self.views}
         self.odometry = Odometry()
@@ -143,8 +143,9 @@ class PathPrediction:
             return out
         t, cal = self.cfg.tracker, self.cals[view]
         tracker = self.trackers[view]
+        floating_only = view in self.floating_only
         for blob, track in self._seen.get(view, []):
-            if view in self.floating_only and not track.floating:
+            if floating_only and not track.floating:
                 continue
             if tracker.in_path(track, t_s, self.pose, speed_mps, yaw_rate):
                 # a road user's width at most: a held stretch of scenery would pass the persistence

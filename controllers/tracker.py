@@ -209,7 +209,7 @@ class BlobTracker:
 
     def oncoming(self, tr: Track) -> bool:
         """Whether ``tr`` moves by the rules for oncoming traffic (``TrackerConfig.oncoming``)."""
-        return self.cfg.oncoming and self.cfg.turn_across and tr.floating
+        return self.cfg.oncoming_rules and tr.floating
 
     def closing_in(self, tr: Track, t0: float) -> bool:
         """Whether the inner edge's bearing, with the ego's own rotation taken out, moves

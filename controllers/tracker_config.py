@@ -104,6 +104,12 @@ class TrackerConfig:
     # oncoming at 60 km/h, fitted on depths that err by metres from job to job
     oncoming_max_speed_mps: float = 40.0
 
+    @property
+    def oncoming_rules(self) -> bool:
+        """Whether the rules for oncoming traffic apply: they refine the turn rules'
+        floating tracks, so ``oncoming`` takes effect only with ``turn_across``."""
+        return self.oncoming and self.turn_across
+
     def __post_init__(self) -> None:
         ok = (
             self.gate_frac > 0
