@@ -10,9 +10,10 @@ if os.environ.get("PYTEST_XDIST_WORKER"):
 
 @pytest.fixture(autouse=True)
 def _one_torch_thread_per_worker():
-    """Under pytest -n 2, a test that sets torch's thread count (a bench, a sweep run in this
-    process) leaves it to the next: two workers at two threads each on two cores wait on
-    each other's spinning threads (a fovea run took 86 s instead of 8)."""
+    """Under pytest -n 2, a test that sets torch's thread count (``bittc bench`` or
+    ``bittc profile`` through ``main``, which set it for their process) leaves it to the
+    next: two workers at two threads each on two cores wait on each other's spinning
+    threads (a fovea run took 86 s instead of 8)."""
     if not os.environ.get("PYTEST_XDIST_WORKER"):
         yield
         return

@@ -176,8 +176,12 @@ def test_ncap_gate_needs_every_low_speed_ccrs_green():
 
 
 def test_one_and_two_workers_give_identical_results(tiny, tmp_path):
+    import torch
+
     s = _settings(tiny, controllers=("geofence", "oracle"), num_alphas=(1,))
+    torch.set_num_threads(1)
     a = run_sweep(s, tmp_path / "w1", workers=1, progress=False)
+    assert torch.get_num_threads() == 1  # run in this process: the caller's thread count back
     b = run_sweep(s, tmp_path / "w2", workers=2, progress=False)
     assert not a.failed and not b.failed
     results = (tmp_path / "w1" / "results.csv").read_bytes()

@@ -126,12 +126,15 @@ def run_local(todo: list[RunSpec], settings: SweepSettings, out: Path, workers: 
     by_index = {s.index: s for s in todo}
     tries = {s.index: 0 for s in todo}
     queue = list(todo)
-    pool = None
+    pool, caller_threads = None, None
     if workers > 1:
         import multiprocessing as mp
 
         pool = mp.get_context("spawn").Pool(workers, initializer=_worker_init, initargs=(threads_per_worker(workers),))
-    else:
+    else:  # this process runs them: its caller gets its thread count back
+        import torch
+
+        caller_threads = torch.get_num_threads()
         pin_threads(threads_per_worker(1))
     try:
         while queue:
@@ -150,6 +153,8 @@ def run_local(todo: list[RunSpec], settings: SweepSettings, out: Path, workers: 
         if pool is not None:
             pool.close()
             pool.join()
+        if caller_threads is not None:
+            torch.set_num_threads(caller_threads)
 
 
 def run_ray(
