@@ -74,7 +74,12 @@ T + d / s. Each stage is assigned the fence whose threshold is nearest to that i
 tau, and is reached when tau_hat <= the assigned threshold. With K = 1 every stage
 shares the one fence: warn and brake on it. The required deceleration for a static
 obstacle, s / (2 (tau_hat - d / s)), picks partial or full braking at the partial
-stage. Braking latches; it is released after ``release_frames`` jobs with no fence
+stage (``controllers.stages.fence_stages``). That formula assumes an obstacle that closes
+at the ego's speed; with ``oncoming_full``, where the view whose fence gave tau_hat holds a
+region of oncoming traffic that the tracker predicts into the path
+(``controllers.tracker.BlobTracker.oncoming``: a car closing faster than the ego drives,
+which braking avoids only by stopping short of its lane), the partial stage brakes
+fully. Braking latches; it is released after ``release_frames`` jobs with no fence
 firing. Below ``min_speed_mps`` the controller neither warns nor brakes.
 
 **Frame stride** (``frame_stride``, default ``DEFAULT_FRAME_STRIDE`` = 3): the pair is the
@@ -105,7 +110,6 @@ the same eta = tau / (tau + n dt) as tau * dt_est / (n dt) at its own trained in
 
 from __future__ import annotations
 
-import math
 import time
 
 import numpy as np
@@ -127,13 +131,7 @@ from controllers.geofence_config import (  # noqa: F401  (re-exported: the contr
     frame_stride_ok,
 )
 from controllers.path_prediction import PathPrediction
-from controllers.stages import StagedBrake
-
-
-def nearest_log(values: np.ndarray, target: float) -> int:
-    """Index of the value nearest to ``target`` in log scale (ties: the smaller value)."""
-    d = np.abs(np.log(values) - math.log(max(target, 1e-9)))
-    return int(np.flatnonzero(d == d.min())[0])
+from controllers.stages import StagedBrake, fence_stages
 
 
 class GeofenceController(Controller):
@@ -266,6 +264,7 @@ class GeofenceController(Controller):
                 tel[f"inpath_px_{tag}{tau:g}s"] = int(n)
             views[v] = GeofenceView(tuple(float(t) for t in thr), maps, counted, corridor)
         tau_hat = min(fired_at.values()) if fired_at else None
+        fired_views = {v for v, t in fired_at.items() if t == tau_hat}
         if s < c.min_speed_mps:
             cmd, stage = self._stages.release(), "standstill"
         elif tau_hat is None:
@@ -274,20 +273,15 @@ class GeofenceController(Controller):
             stage = "none" if self._quiet >= c.release_frames else "hold"
         else:
             self._quiet = 0
-            offset_s = self.cal.bumper_ahead_m / s  # camera plane -> bumper, static obstacle
-            st = c.stages
-            reached = [
-                tau_hat <= self._thr[nearest_log(self._thr, T + offset_s)] + 1e-9
-                for T in (st.warn_ttc_s, st.partial_ttc_s, st.full_ttc_s)
-            ]
-            required = s / (2 * max(tau_hat - offset_s, 0.05))
+            reached, required = fence_stages(self._thr, tau_hat, s, self.cal.bumper_ahead_m, c.stages)
+            if c.oncoming_full and reached[1] and self._paths.oncoming_views & fired_views:
+                reached[2] = True  # an oncoming car closes faster than a static obstacle asks
             cmd = self._stages.update(*reached, required)
             stage = "full" if reached[2] else "partial" if reached[1] else "warn" if reached[0] else "fence"
-        fired_views = [v for v, t in fired_at.items() if t == tau_hat]
         tel = {
             "estimator_ms": round(est_ms, 3),
             "fence_fired_s": tau_hat if tau_hat is not None else "",
-            "fired_view": "+".join(fired_views),
+            "fired_view": "+".join(v for v in self._fences if v in fired_views),
             "derotated": "+".join(derotated),  # views whose earlier frame the network extracted anew
             "stage": stage,
             **tel,

@@ -89,6 +89,10 @@ class GeofenceConfig:
     nested: bool = True  # a fence's evidence counts only with evidence in a larger fence too
     persistence_frames: int = 2  # [jobs] consecutive jobs before a fence fires
     release_frames: int = 3  # [jobs] without any fence firing before braking is released
+    # the partial stage brakes fully where the view whose fence fired holds a region of
+    # oncoming traffic predicted into the path: s / (2 TTC) is what a static obstacle asks,
+    # and an oncoming car in a turn across its lane is avoided only by stopping short of it
+    oncoming_full: bool = True
     min_speed_mps: float = 1.0  # [m/s] below this: no warning, no braking
     frame_stride: int = DEFAULT_FRAME_STRIDE  # [frames] the pair is (k - stride, k): 3x the motion per pair
     fovea_fences_from_s: float = DEFAULT_FOVEA_FENCES_FROM_S  # [s] with a fovea: fences below run on the wide view only

@@ -82,6 +82,9 @@ class PathPrediction:
         self.ground_depth = {v: ground_depth_per_row(cals[v]) for v in self.views}
         self.odometry = Odometry()
         self._seen: dict[str, list[tuple[Blob, Track]]] = {}
+        # views whose regions predicted into the path this job include oncoming traffic
+        # (``BlobTracker.oncoming``): a car that closes faster than the ego drives
+        self.oncoming_views: set[str] = set()
 
     @property
     def pose(self) -> tuple[float, float, float]:
@@ -92,6 +95,7 @@ class PathPrediction:
         """Dead-reckon the ego's pose to this job; forget the last job's regions."""
         self.odometry.update(t_s, speed_mps, yaw_rate_radps)
         self._seen = {}
+        self.oncoming_views = set()
 
     def observe(self, view: str, maps: np.ndarray, thr: np.ndarray, bands: list, speed_mps: float, t_s: float):
         """Extract the regions of ``view`` (sorted (K, H, W) maps of fences ``thr`` [s],
@@ -156,6 +160,8 @@ class PathPrediction:
                 track.held = 0  # its bearing moves out now: nothing to hold
             if track.held > 0 and not self._refuted(view, track):
                 out |= blob.mask
+                if tracker.oncoming(track):
+                    self.oncoming_views.add(view)
             track.held = max(track.held - 1, 0)
         return out
 

@@ -11,11 +11,17 @@ bumper-to-bumper TTC of the critical in-path actor:
   3. full braking when TTC <= ``full_ttc_s`` (0.9 s).
 Braking latches: once engaged it is never reduced while a threat remains, and it is
 released (with the warning) only when the controller says the threat is gone.
+
+``fence_stages`` maps a geofence controller's quantized TTC (the smallest fired fence) to
+these stages.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
+
+import numpy as np
 
 from controllers.base import BrakeCommand
 
@@ -67,3 +73,26 @@ class StagedBrake:
         """No threat any more: brakes and warning off."""
         self.level_mps2 = 0.0
         return BrakeCommand()
+
+
+def nearest_log(values: np.ndarray, target: float) -> int:
+    """Index of the value nearest to ``target`` in log scale (ties: the smaller value)."""
+    d = np.abs(np.log(values) - math.log(max(target, 1e-9)))
+    return int(np.flatnonzero(d == d.min())[0])
+
+
+def fence_stages(
+    thr: np.ndarray, tau_hat_s: float, speed_mps: float, bumper_ahead_m: float, cfg: StageConfig
+) -> tuple[list[bool], float]:
+    """The stages (warn, partial, full) that quantized TTC ``tau_hat_s`` [s, camera plane]
+    reaches among sorted fences ``thr`` [s], and the deceleration [m/s^2] a static obstacle
+    asks. A stage threshold T [s, bumper to bumper] becomes the camera-plane T + d / s (the
+    bumper lies d ahead of the camera; a static obstacle covers d in d / s) and is assigned
+    the fence nearest to that in log tau; it is reached when tau_hat <= that fence. The
+    required deceleration of a static obstacle: s / (2 (tau_hat - d / s))."""
+    offset_s = bumper_ahead_m / speed_mps
+    reached = [
+        tau_hat_s <= thr[nearest_log(thr, T + offset_s)] + 1e-9
+        for T in (cfg.warn_ttc_s, cfg.partial_ttc_s, cfg.full_ttc_s)
+    ]
+    return reached, speed_mps / (2 * max(tau_hat_s - offset_s, 0.05))

@@ -59,9 +59,10 @@ def add_box(tau, dist_m, lateral_m, tau_s, width_m=1.8, height_m=1.5):
     return tau
 
 
-def run(tau_map, speed=SPEED, jobs=3, thresholds=THR):
+def run(tau_map, speed=SPEED, jobs=3, thresholds=THR, cfg=None):
     est = MapEstimator()
-    ctrl = GeofenceController(est, GeofenceConfig(thresholds_s=thresholds, frame_stride=1))  # maps per pair
+    # maps per pair; ``cfg``: more GeofenceConfig fields
+    ctrl = GeofenceController(est, GeofenceConfig(thresholds_s=thresholds, frame_stride=1, **(cfg or {})))
     ctrl.reset(CAL)
     img = np.zeros((CAM.height_px, CAM.width_px, 3), np.uint8)
     est.tau = tau_map

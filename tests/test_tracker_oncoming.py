@@ -2,7 +2,9 @@
 regions of a car oncoming in the ego's path from a pinhole projection in closed form."""
 
 import numpy as np
+import pytest
 
+import tests.test_geofence_controller as gc
 from controllers.geofence_config import GeofenceConfig
 from controllers.path_prediction import PathPrediction
 from controllers.tracker import BlobTracker, TrackerConfig
@@ -91,3 +93,59 @@ def test_a_predicted_oncoming_car_across_the_centre_stays_predicted(monkeypatch)
     assert _fovea_predictions(oncoming=True, standing=False, across_from=4) == [False] * 2 + [True] * 6
     # beside the centre it is held for hold_jobs (2) more jobs only
     assert _fovea_predictions(oncoming=True, standing=False) == [False] * 2 + [True] * 4 + [False] * 2
+
+
+def _oncoming_views(standing: bool, view: str = "fovea") -> list[tuple[bool, bool]]:
+    """Per job, whether ``view`` predicts a region into the path, and whether it is among
+    the views holding oncoming traffic predicted into the path (the regions of
+    ``_fovea_predictions``)."""
+    cal = _cal()
+    h, w = cal.height_px, cal.width_px
+    thr = np.asarray(THRESHOLDS_S)
+    bands = [np.zeros((h, w), bool) for _ in thr]
+    for b in bands:
+        b[40:90] = True
+    paths = PathPrediction(GeofenceConfig(thresholds_s=THRESHOLDS_S), {"wide": cal, "fovea": cal})
+    out = []
+    for k in range(8):
+        t = 0.1 * k
+        paths.start_job(t, SPEED_MPS, 0.0)
+        maps = np.zeros((len(thr), h, w), np.float32)
+        maps[:, 45 : (89 if standing else 60 + 2 * k) + 1, int(cal.cx_px) + 2 : int(cal.cx_px) + 14 + 2 * k] = 1.0
+        for view in ("wide", "fovea"):
+            paths.observe(view, maps, thr, bands, SPEED_MPS, t)
+        predicted = paths.predicted(view, (h, w), t, SPEED_MPS, 0.0).any()
+        out.append((bool(predicted), view in paths.oncoming_views))
+    return out
+
+
+def test_the_views_holding_predicted_oncoming_traffic_are_named_per_job(monkeypatch):
+    assert _oncoming_views(standing=False) == [(False, False)] * 2 + [(True, True)] * 6
+    # the same region predicted in the wide view as other than oncoming traffic is not named
+    assert _oncoming_views(standing=False, view="wide") == [(False, False)] * 2 + [(True, True)] * 6
+    with monkeypatch.context() as m:
+        m.setattr(BlobTracker, "oncoming", lambda self, tr: False)
+        assert _oncoming_views(standing=False, view="wide") == [(False, False)] * 2 + [(True, False)] * 6
+    # a prediction that fails from job 4 on is held for hold_jobs (2) jobs, then dropped
+    in_path = BlobTracker.in_path
+    monkeypatch.setattr(BlobTracker, "in_path", lambda self, tr, t_s, *a: t_s < 0.35 and in_path(self, tr, t_s, *a))
+    assert [o for _, o in _oncoming_views(standing=False)] == [False] * 2 + [True] * 4 + [False] * 2
+
+
+@pytest.mark.parametrize("full", [True, False])
+def test_oncoming_traffic_in_the_path_brakes_fully_at_the_partial_stage(monkeypatch, full):
+    # at 30 km/h a car 12 m ahead in the corridor reaches the partial stage (1.8 s fence),
+    # where a static obstacle asks 2.6 m/s^2: partial braking; where the view that fired
+    # holds oncoming traffic predicted into the path it brakes fully
+    start_job = PathPrediction.start_job
+
+    def with_oncoming(self, *a):
+        start_job(self, *a)
+        self.oncoming_views = {"wide"}
+
+    monkeypatch.setattr(PathPrediction, "start_job", with_oncoming)
+    d, speed = 12.0, 30 / 3.6
+    cmds = gc.run(gc.add_box(gc.road(speed), d, 0.0, d / speed), speed=speed, cfg=dict(oncoming_full=full))
+    assert cmds[1].telemetry["fence_fired_s"] == 1.8
+    assert cmds[1].decel_mps2 == (9.0 if full else 4.0)
+    assert cmds[1].telemetry["stage"] == ("full" if full else "partial")
