@@ -46,12 +46,15 @@ def test_an_oncoming_car_cut_by_the_image_side_predicts_by_its_leading_edge():
     assert not _oncoming(OFF, x0_m=1.5, vx_mps=-1.0, cut_from=4)
 
 
-def _fovea_predictions(oncoming: bool, standing: bool, stands_from: int = 99, across_from: int = 99) -> list[bool]:
-    """Per job, whether the fovea's regions count as predicted: a box inside every fence
-    that comes nearer (down and wider) job by job, floating above the counted rows
-    (``standing``: reaching their lowest row; from job ``stands_from`` on), right of the
-    image centre (from job ``across_from`` on, across it), in a camera whose two views
-    are alike."""
+def _approach(
+    oncoming: bool, standing: bool, stands_from: int = 99, across_from: int = 99, view: str = "fovea"
+) -> list[tuple[bool, bool]]:
+    """Per job, whether ``view``'s regions count as predicted, and whether ``view`` is
+    among the views holding oncoming traffic predicted into the path
+    (``PathPrediction.oncoming_views``): a box inside every fence that comes nearer (down
+    and wider) job by job, floating above the counted rows (``standing``: reaching their
+    lowest row; from job ``stands_from`` on), right of the image centre (from job
+    ``across_from`` on, across it), in a camera whose two views are alike."""
     cal = _cal()
     h, w = cal.height_px, cal.width_px
     thr = np.asarray(THRESHOLDS_S)
@@ -69,10 +72,16 @@ def _fovea_predictions(oncoming: bool, standing: bool, stands_from: int = 99, ac
         bottom = 89 if standing or k >= stands_from else 60 + 2 * k
         left = int(cal.cx_px) + (2 if k < across_from else -4)
         maps[:, 45 : bottom + 1, left : left + 2 * half] = 1.0
-        for view in ("wide", "fovea"):
-            paths.observe(view, maps, thr, bands, SPEED_MPS, t)
-        out.append(bool(paths.predicted("fovea", (h, w), t, SPEED_MPS, 0.0).any()))
+        for v in ("wide", "fovea"):
+            paths.observe(v, maps, thr, bands, SPEED_MPS, t)
+        predicted = paths.predicted(view, (h, w), t, SPEED_MPS, 0.0).any()
+        out.append((bool(predicted), view in paths.oncoming_views))
     return out
+
+
+def _fovea_predictions(oncoming: bool, standing: bool, stands_from: int = 99, across_from: int = 99) -> list[bool]:
+    """Per job, whether the fovea's regions count as predicted (``_approach``)."""
+    return [p for p, _ in _approach(oncoming, standing, stands_from, across_from)]
 
 
 def test_the_fovea_predicts_its_floating_tracks_only():
@@ -95,41 +104,17 @@ def test_a_predicted_oncoming_car_across_the_centre_stays_predicted(monkeypatch)
     assert _fovea_predictions(oncoming=True, standing=False) == [False] * 2 + [True] * 4 + [False] * 2
 
 
-def _oncoming_views(standing: bool, view: str = "fovea") -> list[tuple[bool, bool]]:
-    """Per job, whether ``view`` predicts a region into the path, and whether it is among
-    the views holding oncoming traffic predicted into the path (the regions of
-    ``_fovea_predictions``)."""
-    cal = _cal()
-    h, w = cal.height_px, cal.width_px
-    thr = np.asarray(THRESHOLDS_S)
-    bands = [np.zeros((h, w), bool) for _ in thr]
-    for b in bands:
-        b[40:90] = True
-    paths = PathPrediction(GeofenceConfig(thresholds_s=THRESHOLDS_S), {"wide": cal, "fovea": cal})
-    out = []
-    for k in range(8):
-        t = 0.1 * k
-        paths.start_job(t, SPEED_MPS, 0.0)
-        maps = np.zeros((len(thr), h, w), np.float32)
-        maps[:, 45 : (89 if standing else 60 + 2 * k) + 1, int(cal.cx_px) + 2 : int(cal.cx_px) + 14 + 2 * k] = 1.0
-        for view in ("wide", "fovea"):
-            paths.observe(view, maps, thr, bands, SPEED_MPS, t)
-        predicted = paths.predicted(view, (h, w), t, SPEED_MPS, 0.0).any()
-        out.append((bool(predicted), view in paths.oncoming_views))
-    return out
-
-
 def test_the_views_holding_predicted_oncoming_traffic_are_named_per_job(monkeypatch):
-    assert _oncoming_views(standing=False) == [(False, False)] * 2 + [(True, True)] * 6
+    assert _approach(oncoming=True, standing=False) == [(False, False)] * 2 + [(True, True)] * 6
     # the same region predicted in the wide view as other than oncoming traffic is not named
-    assert _oncoming_views(standing=False, view="wide") == [(False, False)] * 2 + [(True, True)] * 6
+    assert _approach(oncoming=True, standing=False, view="wide") == [(False, False)] * 2 + [(True, True)] * 6
     with monkeypatch.context() as m:
         m.setattr(BlobTracker, "oncoming", lambda self, tr: False)
-        assert _oncoming_views(standing=False, view="wide") == [(False, False)] * 2 + [(True, False)] * 6
+        assert _approach(oncoming=True, standing=False, view="wide") == [(False, False)] * 2 + [(True, False)] * 6
     # a prediction that fails from job 4 on is held for hold_jobs (2) jobs, then dropped
     in_path = BlobTracker.in_path
     monkeypatch.setattr(BlobTracker, "in_path", lambda self, tr, t_s, *a: t_s < 0.35 and in_path(self, tr, t_s, *a))
-    assert [o for _, o in _oncoming_views(standing=False)] == [False] * 2 + [True] * 4 + [False] * 2
+    assert [o for _, o in _approach(oncoming=True, standing=False)] == [False] * 2 + [True] * 4 + [False] * 2
 
 
 @pytest.mark.parametrize("full", [True, False])
