@@ -178,6 +178,7 @@ def fenced_blobs(
     ground_depth: np.ndarray,
     join_rows: int = 0,
     pad_px: np.ndarray | None = None,
+    need_far_px=None,
 ) -> list[Blob]:
     """Regions of ``inside`` (counted inside pixels, (H, W) bool) that stand on the road,
     i.e. hold a pixel of ``touch`` (the rows where a standing region's bottom lies), of at
@@ -186,7 +187,9 @@ def fenced_blobs(
     per row [m]). Parts one above the other with at most ``join_rows`` rows between them
     are one region: a road user's upper body counted in a larger fence and its legs in a
     smaller one, with the rows between counted in neither. ``pad_px`` (K,): per fence, how
-    far beside a region its ground is read (``contact_depth``)."""
+    far beside a region its ground is read (``contact_depth``). ``need_far_px`` (ground
+    depth [m] -> [px]): a region whose ground depth is known needs only that many pixels
+    where they are fewer than ``need_px`` (a region judged at the depth where it stands)."""
     if not inside.any():
         return []
     mask = inside.astype(np.uint8)
@@ -199,8 +202,9 @@ def fenced_blobs(
     standing = np.zeros(n, dtype=bool)
     standing[labels[touch & inside]] = True
     out = []
+    floor_px = need_px if need_far_px is None else min(need_px, need_far_px(math.inf))
     for k in range(1, n):
-        if not standing[k] or stats[k, cv2.CC_STAT_AREA] < need_px:
+        if not standing[k] or stats[k, cv2.CC_STAT_AREA] < floor_px:
             continue
         m = labels == k
         shares = [(maps[i][m] > prob_inside).mean() for i in range(len(thr))]
@@ -210,6 +214,9 @@ def fenced_blobs(
         # the smallest fence that holds it: the road between it and the ego shows there first
         pad = int(pad_px[i_min]) if pad_px is not None else 0
         z = contact_depth(maps[i_min] > prob_inside, m, u0, u1, ground_depth, pad)
+        need_k = need_px if need_far_px is None or z is None else min(need_px, need_far_px(z))
+        if stats[k, cv2.CC_STAT_AREA] < need_k:
+            continue
         out.append(Blob(m, float(u0), float(u1), float(thr[i_min]), z))
     return out
 

@@ -112,6 +112,9 @@ class PathPrediction:
             return
         c, t, cal = self.cfg, self.cfg.tracker, self.cals[view]
         need = need_px(cal, static_depth_m(cal, speed_mps, thr[-1]), c.min_region_px, c.min_face_m2)
+        # with the oncoming rules a region's size, like its height, is judged where its ground
+        # lies beyond the largest fence's static depth: a car oncoming 40 m away
+        far = (lambda z: need_px(cal, z, c.min_region_px, c.min_face_m2)) if t.oncoming_rules else None
         inside = np.zeros(maps.shape[1:], dtype=bool)
         touch = np.zeros_like(inside)
         parts = []  # each judged fence's counted inside pixels, from the smallest fence up
@@ -128,7 +131,9 @@ class PathPrediction:
             touch = inside
         depths = np.array([max(static_depth_m(cal, speed_mps, tau), 1e-6) for tau in thr])
         pad = np.ceil(cal.fx_px * t.contact_pad_m / depths)
-        found = fenced_blobs(inside, touch, maps, thr, c.prob_inside, need, self.ground_depth[view], t.join_rows, pad)
+        found = fenced_blobs(
+            inside, touch, maps, thr, c.prob_inside, need, self.ground_depth[view], t.join_rows, pad, far
+        )
         blobs = [b for b in found if self._upright(b, cal, speed_mps)]
         if t.edge_from_largest:
             blobs = [self._largest_fence_edge(b, parts, cal) for b in blobs]

@@ -45,7 +45,8 @@ at ``float_closing_mps`` or faster along the ego's heading when the track began
 lane). With ``oncoming`` as well (``BlobTracker.oncoming``), such a track may move at up
 to ``oncoming_max_speed_mps``, predicts by its leading edge where the image's side cuts
 its region, and is fitted on its regions with the ground's depth under them only (at
-least ``min_hits``); the fovea's floating tracks predict too (``controllers.path_prediction``).
+least ``min_hits``); the fovea's floating tracks predict too, and regions are sized at the
+depth of the ground under them (``controllers.path_prediction``).
 
 Odometry (``controllers.path_prediction.Odometry``): x [m] forward and y [m] left of the
 ego's footprint centre at the run's start, heading psi [rad]. Camera frame to ego frame:

@@ -98,7 +98,10 @@ class TrackerConfig:
     # the ground's depth under them (elsewhere the depth is the fence's TTC at the ego's
     # speed, far too near for a car that closes faster); it may move at up to
     # ``oncoming_max_speed_mps``; once predicted, it keeps predicting while its region
-    # lies across the image centre. Off: floating tracks predict in the wide view alone
+    # lies across the image centre. And any region's size, like its height (``turn_across``),
+    # is judged at the ground's depth under it where that lies beyond the largest fence's
+    # static depth (the GVT 40 m away of a turn at 15 km/h, whose largest fence reaches
+    # 12 m). Off: floating tracks predict in the wide view alone
     oncoming: bool = True
     # [m/s] a floating track's ground speed bound (``max_speed_mps`` is a road user's): a car
     # oncoming at 60 km/h, fitted on depths that err by metres from job to job

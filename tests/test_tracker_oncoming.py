@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 
 import tests.test_geofence_controller as gc
+from controllers.evidence import fenced_blobs
 from controllers.geofence_config import GeofenceConfig
 from controllers.path_prediction import PathPrediction
 from controllers.tracker import BlobTracker, TrackerConfig
@@ -134,3 +135,43 @@ def test_oncoming_traffic_in_the_path_brakes_fully_at_the_partial_stage(monkeypa
     assert cmds[1].telemetry["fence_fired_s"] == 1.8
     assert cmds[1].decel_mps2 == (9.0 if full else 4.0)
     assert cmds[1].telemetry["stage"] == ("full" if full else "partial")
+
+
+def test_a_region_is_sized_where_its_ground_lies_with_the_oncoming_rules():
+    # a 5 x 10 px region in both fences, the ground under it free 60 m away: too small for
+    # the 100 px asked at the largest fence's static depth, as big as a face asks at 60 m
+    h, w = 96, 288
+    thr = np.array([0.8, 2.8])
+    maps = np.zeros((2, h, w), np.float32)
+    maps[:, 40:50, 100:105] = 1.0
+    inside = maps[1] > 0.5
+    ground = np.full(h, 60.0)
+    far = lambda z: max(8.0, 180000.0 / z**2)  # noqa: E731  (50 px at 60 m)
+    assert not fenced_blobs(inside, inside, maps, thr, 0.5, 100.0, ground)
+    (blob,) = fenced_blobs(inside, inside, maps, thr, 0.5, 100.0, ground, need_far_px=far)
+    assert blob.contact_depth_m == 60.0
+    assert not fenced_blobs(inside, inside, maps, thr, 0.5, 100.0, np.full(h, 50.0), need_far_px=far)
+    # where the fence reaches the image's bottom under it, its ground is not known
+    maps[0, 40:, 100:105] = 1.0
+    assert not fenced_blobs(inside, inside, maps, thr, 0.5, 100.0, ground, need_far_px=far)
+
+
+def test_the_oncoming_rules_size_a_region_where_its_ground_lies():
+    # 9 px floating on the ground 52 m ahead: short of the 9.9 px a face asks at the 2.8 s
+    # fence's static depth (31 m), enough for the 8 px asked where it stands
+    cal = _cal()
+    h, w = cal.height_px, cal.width_px
+    thr = np.asarray(THRESHOLDS_S)
+    bands = [np.zeros((h, w), bool) for _ in thr]
+    for b in bands:
+        b[40:90] = True
+    maps = np.zeros((len(thr), h, w), np.float32)
+    maps[:, 49:52, 150:153] = 1.0
+    seen = []
+    for oncoming in (True, False):
+        cfg = GeofenceConfig(thresholds_s=THRESHOLDS_S, tracker=TrackerConfig(oncoming=oncoming))
+        paths = PathPrediction(cfg, {"wide": cal, "fovea": cal})
+        paths.start_job(0.0, SPEED_MPS, 0.0)
+        paths.observe("wide", maps, thr, bands, SPEED_MPS, 0.0)
+        seen.append(len(paths._seen["wide"]))
+    assert seen == [1, 0]
