@@ -12,6 +12,7 @@ curvature k = w / s. At w = 0 both are the straight-road rules of ``controllers.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import cv2
@@ -178,7 +179,7 @@ def fenced_blobs(
     ground_depth: np.ndarray,
     join_rows: int = 0,
     pad_px: np.ndarray | None = None,
-    need_far_px=None,
+    need_far_px: Callable[[float], float] | None = None,
 ) -> list[Blob]:
     """Regions of ``inside`` (counted inside pixels, (H, W) bool) that stand on the road,
     i.e. hold a pixel of ``touch`` (the rows where a standing region's bottom lies), of at

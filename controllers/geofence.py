@@ -79,8 +79,9 @@ at the ego's speed; with ``oncoming_full``, where the view whose fence gave tau_
 region of oncoming traffic that the tracker predicts into the path
 (``controllers.tracker.BlobTracker.oncoming``: a car closing faster than the ego drives,
 which braking avoids only by stopping short of its lane), the partial stage brakes
-fully. Braking latches; it is released after ``release_frames`` jobs with no fence
-firing. Below ``min_speed_mps`` the controller neither warns nor brakes.
+fully (``stage`` telemetry ``full-oncoming``). Braking latches; it is released after
+``release_frames`` jobs with no fence firing. Below ``min_speed_mps`` the controller
+neither warns nor brakes.
 
 **Frame stride** (``frame_stride``, default ``DEFAULT_FRAME_STRIDE`` = 3): the pair is the
 latest frame and the one captured three frames before it (0.3 s at 10 Hz), so a target's
@@ -274,10 +275,14 @@ class GeofenceController(Controller):
         else:
             self._quiet = 0
             reached, required = fence_stages(self._thr, tau_hat, s, self.cal.bumper_ahead_m, c.stages)
-            if c.oncoming_full and reached[1] and self._paths.oncoming_views & fired_views:
-                reached[2] = True  # an oncoming car closes faster than a static obstacle asks
+            # an oncoming car closes faster than the static obstacle that ``required`` assumes
+            oncoming = (
+                c.oncoming_full and reached[1] and not reached[2] and bool(self._paths.oncoming_views & fired_views)
+            )
+            reached[2] = reached[2] or oncoming
             cmd = self._stages.update(*reached, required)
             stage = "full" if reached[2] else "partial" if reached[1] else "warn" if reached[0] else "fence"
+            stage += "-oncoming" if oncoming else ""
         tel = {
             "estimator_ms": round(est_ms, 3),
             "fence_fired_s": tau_hat if tau_hat is not None else "",

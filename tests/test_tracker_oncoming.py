@@ -2,7 +2,6 @@
 regions of a car oncoming in the ego's path from a pinhole projection in closed form."""
 
 import numpy as np
-import pytest
 
 import tests.test_geofence_controller as gc
 from controllers.evidence import fenced_blobs
@@ -107,8 +106,9 @@ def test_a_predicted_oncoming_car_across_the_centre_stays_predicted(monkeypatch)
 
 def test_the_views_holding_predicted_oncoming_traffic_are_named_per_job(monkeypatch):
     assert _approach(oncoming=True, standing=False) == [(False, False)] * 2 + [(True, True)] * 6
-    # the same region predicted in the wide view as other than oncoming traffic is not named
+    # the wide view names it too
     assert _approach(oncoming=True, standing=False, view="wide") == [(False, False)] * 2 + [(True, True)] * 6
+    # the same region predicted in the wide view as other than oncoming traffic is not named
     with monkeypatch.context() as m:
         m.setattr(BlobTracker, "oncoming", lambda self, tr: False)
         assert _approach(oncoming=True, standing=False, view="wide") == [(False, False)] * 2 + [(True, False)] * 6
@@ -118,26 +118,34 @@ def test_the_views_holding_predicted_oncoming_traffic_are_named_per_job(monkeypa
     assert [o for _, o in _approach(oncoming=True, standing=False)] == [False] * 2 + [True] * 4 + [False] * 2
 
 
-@pytest.mark.parametrize("full", [True, False])
-def test_oncoming_traffic_in_the_path_brakes_fully_at_the_partial_stage(monkeypatch, full):
-    # at 30 km/h a car 12 m ahead in the corridor reaches the partial stage (1.8 s fence),
-    # where a static obstacle asks 2.6 m/s^2: partial braking; where the view that fired
-    # holds oncoming traffic predicted into the path it brakes fully
+def _brake_with_oncoming(monkeypatch, views: set[str], tau_s: float | None = None, **cfg) -> tuple[float, str]:
+    """(deceleration [m/s^2], stage) at the second job, on a wide view alone at 30 km/h, for
+    a car 12 m ahead in the corridor (TTC ``tau_s``, by default 1.44 s: inside the 1.8 s
+    fence, the partial stage, where a static obstacle asks 2.6 m/s^2: partial braking),
+    with ``views`` named as holding oncoming traffic predicted into the path."""
     start_job = PathPrediction.start_job
 
     def with_oncoming(self, *a):
         start_job(self, *a)
-        self.oncoming_views = {"wide"}
+        self.oncoming_views = set(views)
 
     monkeypatch.setattr(PathPrediction, "start_job", with_oncoming)
     d, speed = 12.0, 30 / 3.6
-    cmds = gc.run(gc.add_box(gc.road(speed), d, 0.0, d / speed), speed=speed, cfg=dict(oncoming_full=full))
-    assert cmds[1].telemetry["fence_fired_s"] == 1.8
-    assert cmds[1].decel_mps2 == (9.0 if full else 4.0)
-    assert cmds[1].telemetry["stage"] == ("full" if full else "partial")
+    cmds = gc.run(gc.add_box(gc.road(speed), d, 0.0, tau_s or d / speed), speed=speed, cfg=cfg)
+    return cmds[1].decel_mps2, cmds[1].telemetry["stage"]
 
 
-def test_a_region_is_sized_where_its_ground_lies_with_the_oncoming_rules():
+def test_oncoming_traffic_in_the_path_brakes_fully_at_the_partial_stage(monkeypatch):
+    assert _brake_with_oncoming(monkeypatch, set()) == (4.0, "partial")
+    assert _brake_with_oncoming(monkeypatch, {"wide"}) == (9.0, "full-oncoming")
+    assert _brake_with_oncoming(monkeypatch, {"wide"}, oncoming_full=False) == (4.0, "partial")
+    # only where the view whose fence fired holds it
+    assert _brake_with_oncoming(monkeypatch, {"fovea"}) == (4.0, "partial")
+    # and only at a braking stage: in the 2.8 s fence alone it warns
+    assert _brake_with_oncoming(monkeypatch, {"wide"}, tau_s=2.5) == (0.0, "warn")
+
+
+def test_fenced_blobs_sizes_a_region_where_its_ground_lies():
     # a 5 x 10 px region in both fences, the ground under it free 60 m away: too small for
     # the 100 px asked at the largest fence's static depth, as big as a face asks at 60 m
     h, w = 96, 288
@@ -151,12 +159,17 @@ def test_a_region_is_sized_where_its_ground_lies_with_the_oncoming_rules():
     (blob,) = fenced_blobs(inside, inside, maps, thr, 0.5, 100.0, ground, need_far_px=far)
     assert blob.contact_depth_m == 60.0
     assert not fenced_blobs(inside, inside, maps, thr, 0.5, 100.0, np.full(h, 50.0), need_far_px=far)
+    # a region whose ground lies nearer than the largest fence's static depth needs need_px
+    maps[:, 40:50, 100:115] = 1.0  # 150 px, where a face 20 m away asks 450
+    (blob,) = fenced_blobs(maps[1] > 0.5, maps[1] > 0.5, maps, thr, 0.5, 100.0, np.full(h, 20.0), need_far_px=far)
     # where the fence reaches the image's bottom under it, its ground is not known
+    maps[:] = 0.0
+    maps[:, 40:50, 100:105] = 1.0
     maps[0, 40:, 100:105] = 1.0
     assert not fenced_blobs(inside, inside, maps, thr, 0.5, 100.0, ground, need_far_px=far)
 
 
-def test_the_oncoming_rules_size_a_region_where_its_ground_lies():
+def test_path_prediction_sizes_by_the_ground_only_with_the_oncoming_rules():
     # 9 px floating on the ground 52 m ahead: short of the 9.9 px a face asks at the 2.8 s
     # fence's static depth (31 m), enough for the 8 px asked where it stands
     cal = _cal()
