@@ -40,7 +40,8 @@ def _held(hold_jobs: int, in_path, closing=True, width_px: int = 4):
     predicts into the path as ``in_path`` says, job by job."""
     from controllers.geofence import GeofenceConfig
     from controllers.path_prediction import PathPrediction
-    from controllers.tracker import Track, TrackerConfig, _Obs
+    from controllers.track import Obs, Track
+    from controllers.tracker import TrackerConfig
     from tests.test_geofence_controller import CAL, SPEED
 
     cfg = GeofenceConfig(tracker=TrackerConfig(hold_jobs=hold_jobs, predict_unchecked=True))
@@ -48,7 +49,7 @@ def _held(hold_jobs: int, in_path, closing=True, width_px: int = 4):
     mask = np.zeros((CAL.height_px, CAL.width_px), dtype=bool)
     mask[40:50, 200 : 200 + width_px] = True
     blob = Blob(mask, 200.0, 200.0 + width_px - 1, 1.5)
-    track = Track(obs=[_Obs(0.0, blob.u_left, blob.u_right, 1.5, None, SPEED, (0.0, 0.0, 0.0))])
+    track = Track(obs=[Obs(0.0, blob.u_left, blob.u_right, 1.5, None, SPEED, (0.0, 0.0, 0.0))])
     tracker, answers = paths.trackers["wide"], iter(in_path)
     tracker.in_path = lambda *args: next(answers)
     tracker.closing_in = lambda *args: closing

@@ -9,7 +9,8 @@ import numpy as np
 
 from controllers.evidence import Blob, contact_depth
 from controllers.path_prediction import PathPrediction
-from controllers.tracker import BlobTracker, Track, TrackerConfig, _Obs
+from controllers.track import Obs, Track
+from controllers.tracker import BlobTracker, TrackerConfig
 from tests.test_geofence_controller import CAL
 
 H, W = 40, 60
@@ -48,7 +49,7 @@ def test_the_inner_edge_is_read_on_the_largest_fence_that_holds_the_region():
     blob, parts = _region_left_of_centre()
     read = PathPrediction._largest_fence_edge(blob, parts, CAL)
     assert read.inner_px == 79.0 and (read.u_left, read.u_right) == (60.0, 89.0)
-    obs = _Obs(0.0, read.u_left, read.u_right, 2.8, None, 10.0, (0.0, 0.0, 0.0), read.inner_px)
+    obs = Obs(0.0, read.u_left, read.u_right, 2.8, None, 10.0, (0.0, 0.0, 0.0), read.inner_px)
     assert math.isclose(obs.inner_bearing(CAL), (79.0 - CAL.cx_px) / CAL.fx_px)
     # without it, the strip's end is the inner edge
     obs.inner_px = None
@@ -61,7 +62,7 @@ def test_the_inner_edge_is_read_on_the_largest_fence_that_holds_the_region():
 def _closing(columns, tol_px_per_s: float, width_px: int = 5) -> bool:
     cfg = TrackerConfig(bearing_tol_px_per_s=tol_px_per_s, corridor_allowance=False)
     tracker = BlobTracker(cfg, CAL)
-    obs = [_Obs(0.1 * k, u, u + width_px, 2.8, None, 10.0, (0.0, 0.0, 0.0)) for k, u in enumerate(columns)]
+    obs = [Obs(0.1 * k, u, u + width_px, 2.8, None, 10.0, (0.0, 0.0, 0.0)) for k, u in enumerate(columns)]
     track = Track(obs=obs)
     return tracker.closing_in(track, track.contact_time_s())
 

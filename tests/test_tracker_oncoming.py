@@ -46,6 +46,16 @@ def test_an_oncoming_car_cut_by_the_image_side_predicts_by_its_leading_edge():
     assert not _oncoming(OFF, x0_m=1.5, vx_mps=-1.0, cut_from=4)
 
 
+def _judged_rows_40_to_89():
+    """(calibration, thresholds [s], per fence the judged pixels: rows 40-89 of every column)."""
+    cal = _cal()
+    thr = np.asarray(THRESHOLDS_S)
+    bands = [np.zeros((cal.height_px, cal.width_px), bool) for _ in thr]
+    for b in bands:
+        b[40:90] = True
+    return cal, thr, bands
+
+
 def _approach(
     oncoming: bool, standing: bool, stands_from: int = 99, across_from: int = 99, view: str = "fovea"
 ) -> list[tuple[bool, bool]]:
@@ -55,12 +65,8 @@ def _approach(
     and wider) job by job, floating above the counted rows (``standing``: reaching their
     lowest row; from job ``stands_from`` on), right of the image centre (from job
     ``across_from`` on, across it), in a camera whose two views are alike."""
-    cal = _cal()
+    cal, thr, bands = _judged_rows_40_to_89()
     h, w = cal.height_px, cal.width_px
-    thr = np.asarray(THRESHOLDS_S)
-    bands = [np.zeros((h, w), bool) for _ in thr]
-    for b in bands:
-        b[40:90] = True
     tracker = TrackerConfig(oncoming=oncoming)
     paths = PathPrediction(GeofenceConfig(thresholds_s=THRESHOLDS_S, tracker=tracker), {"wide": cal, "fovea": cal})
     out = []
@@ -172,12 +178,8 @@ def test_fenced_blobs_sizes_a_region_where_its_ground_lies():
 def test_path_prediction_sizes_by_the_ground_only_with_the_oncoming_rules():
     # 9 px floating on the ground 52 m ahead: short of the 9.9 px a face asks at the 2.8 s
     # fence's static depth (31 m), enough for the 8 px asked where it stands
-    cal = _cal()
+    cal, thr, bands = _judged_rows_40_to_89()
     h, w = cal.height_px, cal.width_px
-    thr = np.asarray(THRESHOLDS_S)
-    bands = [np.zeros((h, w), bool) for _ in thr]
-    for b in bands:
-        b[40:90] = True
     maps = np.zeros((len(thr), h, w), np.float32)
     maps[:, 49:52, 150:153] = 1.0
     seen = []
