@@ -80,27 +80,24 @@ region of oncoming traffic that the tracker predicts into the path
 (``controllers.tracker.BlobTracker.oncoming``: a car closing faster than the ego drives,
 which braking avoids only by stopping short of its lane), the partial stage brakes
 fully (``stage`` telemetry ``full-oncoming``). Braking latches; it is released after
-``release_frames`` jobs with no fence firing. Below ``min_speed_mps`` the controller
-neither warns nor brakes.
+``release_frames`` jobs with no fence firing, and with ``hold_to_contact`` not before the
+contact time that its last firing bounded (that job's time + tau_hat): a target near
+enough to fill a view may fail every test above while it is still ahead. Below
+``min_speed_mps`` the controller neither warns nor brakes.
 
 **Frame stride** (``frame_stride``, default ``DEFAULT_FRAME_STRIDE`` = 3): the pair is the
 latest frame and the one captured three frames before it (0.3 s at 10 Hz), so a target's
 outline moves three times as far per pair at no extra compute (the estimator caches every
 frame's features). The network's error in the scale ratio eta is roughly fixed, while
 1 - eta = pair interval / (tau + pair interval) shrinks with tau: a wider pair keeps the
-far fences steady (docs/fovea_training.md: the 2.4 s fence held 0.19 s late against 0.55 s
-at stride 2 and 34/36 threats avoided against 32/36). The price: the fence reads the last
-0.3 s of motion, about 0.05 s staler than at stride 2. Stride 2 against 1 on 24 cases
-(``docs/controller_levers.py``): 14 of 19 threats avoided against 10 of 19.
+far fences steady, at the price of reading the last 0.3 s of motion (measured:
+docs/fovea_training.md, ``docs/controller_levers.py``).
 
-**Two views** (a calibration with a ``fovea``): the same rules run on each view with
-its own calibration (corridor, ground rule, standing regions, persistence), each view
-with its own estimator cache; tau_hat is the smallest threshold fired in either view,
-so the most urgent stage over both views decides. ``fovea_fences_from_s`` keeps the
-fences below it on the wide view only: by default those under 1.4 s (at K = 4 the fovea
-runs the 1.84 and 2.8 s fences; the fovea sees the corridor from about 15 m on at zoom 4,
-where the short fences are decided by the wide view anyway: docs/fovea.md); 0 runs every
-fence in both.
+**Two views** (a calibration with a ``fovea``): the same rules run on each view with its
+own calibration and estimator cache; tau_hat is the smallest threshold fired in either
+view. ``fovea_fences_from_s`` keeps the fences below it on the wide view only: by default
+those under 1.4 s (at K = 4 the fovea runs the 1.84 and 2.8 s fences; it sees the
+corridor from about 15 m on, where the wide view decides the short fences: docs/fovea.md).
 
 **Thresholds**: explicit (any order, each within the estimator's trained range), or
 ``default_thresholds(K)``: K values spaced uniformly in log tau over
@@ -111,6 +108,7 @@ the same eta = tau / (tau + n dt) as tau * dt_est / (n dt) at its own trained in
 
 from __future__ import annotations
 
+import math
 import time
 
 import numpy as np
@@ -183,6 +181,7 @@ class GeofenceController(Controller):
         self._streak = {v: np.zeros(len(f), dtype=np.int64) for v, f in self._fences.items()}
         self._quiet = self.cfg.release_frames  # nothing to hold at the start
         self._last = BrakeCommand()
+        self._contact_by_s = -math.inf  # [s] the last braking stage's bound on the contact time
 
     def _bands(self, view: str, maps: np.ndarray, thr: np.ndarray, speed_mps: float, yaw_rate: float) -> list:
         """(H, W) bool per fence of ``thr`` (its map in ``maps``): the pixels where it can be
@@ -270,8 +269,10 @@ class GeofenceController(Controller):
             cmd, stage = self._stages.release(), "standstill"
         elif tau_hat is None:
             self._quiet += 1
-            cmd = self._stages.release() if self._quiet >= c.release_frames else self._last
-            stage = "none" if self._quiet >= c.release_frames else "hold"
+            # braking holds until the contact time its last firing bounded has passed
+            free = self._quiet >= c.release_frames and not (c.hold_to_contact and obs.t_s < self._contact_by_s)
+            cmd = self._stages.release() if free else self._last
+            stage = "none" if free else "hold"
         else:
             self._quiet = 0
             reached, required = fence_stages(self._thr, tau_hat, s, self.cal.bumper_ahead_m, c.stages)
@@ -281,6 +282,8 @@ class GeofenceController(Controller):
             )
             reached[2] = reached[2] or oncoming
             cmd = self._stages.update(*reached, required)
+            if cmd.decel_mps2 > 0:
+                self._contact_by_s = max(self._contact_by_s, obs.t_s + tau_hat)
             stage = "full" if reached[2] else "partial" if reached[1] else "warn" if reached[0] else "fence"
             stage += "-oncoming" if oncoming else ""
         tel = {

@@ -89,6 +89,10 @@ class GeofenceConfig:
     nested: bool = True  # a fence's evidence counts only with evidence in a larger fence too
     persistence_frames: int = 2  # [jobs] consecutive jobs before a fence fires
     release_frames: int = 3  # [jobs] without any fence firing before braking is released
+    # braking is not released before the contact time that its last firing bounded (the job's
+    # time + the fired threshold): a target near enough to fill a view may leave every fence
+    # test (its road no longer shows beneath it) while it is still ahead
+    hold_to_contact: bool = True
     # the partial stage brakes fully where the view whose fence fired holds a region of
     # oncoming traffic predicted into the path: s / (2 TTC) is what a static obstacle asks,
     # and an oncoming car in a turn across its lane is avoided only by stopping short of it
