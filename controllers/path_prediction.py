@@ -13,8 +13,8 @@ above a crossing cyclist's wheels; the smaller fences see it lower down. A regio
 stand up like a road user (``_upright``): span ``min_height_m`` at the static depth of
 its fence (with ``turn_across``, at the ground's depth under it where that is further;
 with the oncoming rules its size is judged there too: ``evidence.fenced_blobs``,
-``need_far_px``), and have an inner edge that does not slant outwards row by row like a strip of verge
-that the network fenced along a fence's boundary. Parts one above the other with at most
+``need_far_px``), and have an inner edge that does not slant outwards row by row like a
+strip of verge that the network fenced along a fence's boundary. Parts one above the other with at most
 ``join_rows`` rows between them are one region: a crossing cyclist's upper body counted
 in the largest fence and its wheels in a smaller one are one target, not two tracks that
 swap their regions job by job. A region's inner edge is read on the largest fence that
