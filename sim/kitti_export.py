@@ -12,6 +12,10 @@ written with:
   every point lies exactly on the rendered surface. Sky and points beyond ``MAX_RANGE_M``
   return nothing. The velodyne frame sits at the camera's optical centre, level, x along
   the ego's heading (y left, z up); ``calib_velo_to_cam.txt`` holds that transform;
+* with ``bittc run --realism``, the image through the run's sensor (``sim.sensor``): the
+  same effects as the run's own views, moved by the exact flow of the native render since
+  the previous capture, with noise from a stream of its own (the run's views keep their
+  bytes) and a video codec of its own where the sensor has one;
 * ``oxts`` with the ego's forward speed (vf, [m/s]);
 * ``bittc_truth.csv``: per frame, the critical actor's camera-plane depth of its nearest
   face (bumper gap + the bumper's distance ahead of the camera) [m] and its camera-plane
@@ -41,6 +45,7 @@ ELEVATION_DEG = (2.0, -24.9)  # [deg] the top and bottom beams
 AZIMUTH_STEP_DEG = 0.2  # [deg]
 MAX_RANGE_M = 120.0  # [m]
 TRUTH_FILE = "bittc_truth.csv"
+EXPORT_STREAM = 2  # the third seed word of the export's sensor noise (the run's views draw from their own)
 
 
 def native_pinhole(camera: CameraConfig) -> Pinhole:
@@ -105,6 +110,12 @@ class KittiExporter:
         self.v2c = None
         self.times: list[float] = []
         self.truth: list[str] = []
+        self.prev = None  # the previous capture (its poses), for the sensor's motion
+        if sim.sensor is not None:
+            from sim.sensor import REALISM_STREAM, new_codec
+
+            self.rng = np.random.default_rng([sim.seed, REALISM_STREAM, EXPORT_STREAM])
+            self.codec = new_codec(sim.sensor)
 
     def __call__(self, rec, frame) -> None:
         i = len(self.times)
@@ -117,8 +128,10 @@ class KittiExporter:
             self.v2c = velo_to_cam(frame.cam_T_world)
             self.rows, self.cols = beam_pixels(self.pin, self.v2c)
         r = self.sim.world.render(frame.cam_T_world, pinhole=self.pin)
+        rgb = r.rgb if self.sim.sensor is None else self._through_sensor(r, frame)
+        self.prev = frame
         name = f"{i:010d}"
-        cv2.imwrite(str(self.tmp / kr.IMAGES / "data" / f"{name}.png"), cv2.cvtColor(r.rgb, cv2.COLOR_RGB2BGR))
+        cv2.imwrite(str(self.tmp / kr.IMAGES / "data" / f"{name}.png"), cv2.cvtColor(rgb, cv2.COLOR_RGB2BGR))
         scan = scan_from_depth(r.depth_m, r.instance, self.pin, self.v2c, self.rows, self.cols)  # a rigid mount
         scan.tofile(self.tmp / kr.VELODYNE / "data" / f"{name}.bin")
         oxts = kr.oxts_line(rec.ego_speed_mps, rec.ego_yaw_rate_radps)
@@ -131,6 +144,21 @@ class KittiExporter:
             depth = f"{d:.4f}"
             ttc = f"{d / crit.closing_speed_mps:.4f}" if crit.closing_speed_mps > 1e-9 and d > 0 else ""
         self.truth.append(f"{i},{rec.t_s:.6f},{rec.ego_speed_mps:.4f},{depth},{ttc}\n")
+
+    def _through_sensor(self, r, frame) -> np.ndarray:
+        """The native render's image through the run's sensor, moved by its exact flow since
+        the previous capture (for the first, since the state one frame interval before)."""
+        from sim.episode_sensor import frame_before
+        from sim.sensor import apply_effects
+        from sim.stepping import pair_ground_truth
+
+        prev = self.prev if self.prev is not None else frame_before(self.sim, frame)
+        dt = frame.t_s - prev.t_s
+        gt = pair_ground_truth(
+            self.pin, r.depth_m, r.instance, frame.cam_T_world, prev.cam_T_world, frame.poses, prev.poses, dt,
+            r.part, frame.part_poses, prev.part_poses,
+        )
+        return apply_effects(r.rgb, self.sim.sensor, gt.flow_px, dt, self.rng, self.codec)
 
     def finish(self) -> Path:
         """Timestamps, calibration and the truth file; the folder renamed into place."""

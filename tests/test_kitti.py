@@ -119,3 +119,20 @@ def test_export_refuses_a_non_empty_folder_and_several_cases(drive, tmp_path, ca
     assert "exports one case" in capsys.readouterr().err
     argv = ["run", "CCRs-50", "--controller", "none", "--out", str(tmp_path / "r"), "--export-kitti", str(drive)]
     assert main(argv) == 2 and "not an empty folder" in capsys.readouterr().err
+
+
+def test_the_export_goes_through_the_runs_sensor_and_keeps_its_lidar_and_truth(drive, tmp_path):
+    import cv2
+
+    (tmp_path / "case.yaml").write_text(CASE.replace("duration_s: 2", "duration_s: 0.5"))
+    argv = ["run", str(tmp_path / "case.yaml"), "--controller", "none", "--out", str(tmp_path / "run"), "--realism"]
+    assert main([*argv, "--export-kitti", str(tmp_path / "drive")]) == 0
+    sensed, clean = read_drive(tmp_path / "drive"), read_drive(drive)
+    assert len(sensed.times_s) == 5
+    for i in range(5):
+        a = cv2.imread(str(sensed.image_paths[i])).astype(int)
+        b = cv2.imread(str(clean.image_paths[i])).astype(int)
+        assert a.shape == b.shape and 1.0 < np.abs(a - b).mean() < 60.0  # the same scene, through a sensor
+        assert np.array_equal(sensed.scan(i), clean.scan(i))  # the lidar sees the exact surface either way
+    truth = (tmp_path / "drive" / "bittc_truth.csv").read_text().splitlines()
+    assert truth == (drive / "bittc_truth.csv").read_text().splitlines()[: len(truth)]
