@@ -4,7 +4,7 @@ hold_to_contact``): a target that leaves every fence test when it is near is sti
 import numpy as np
 import pytest
 
-import tests.test_geofence_controller as gc
+import tests.geofence_maps as gc
 from controllers.base import Observation
 from controllers.geofence import GeofenceConfig, GeofenceController
 

@@ -1,7 +1,5 @@
-"""The geofence controller on hand-made maps: no renderer, no network.
-
-The maps are what a perfect estimator would give at 50 km/h: the road ahead inside every
-fence up to its boundary row, and boxes standing on the road wherever a test puts them."""
+"""The geofence controller on hand-made maps (``tests.geofence_maps``): no renderer, no
+network. The fovea beside the wide view: test_geofence_fovea.py."""
 
 import math
 
@@ -12,66 +10,9 @@ from bittc_core.errors import ConfigError
 from controllers.base import Calibration, Observation
 from controllers.evidence import fenced_road_edge, judged_pixels
 from controllers.geofence import GeofenceConfig, GeofenceController, default_thresholds
-from controllers.road import ground_ttc_per_row
-from sim.camera import CameraConfig, cam_T_ego
+from sim.camera import CameraConfig
 from sim.vehicles import EGO_SIZE_M
-
-CAM = CameraConfig()
-CAL = Calibration.from_camera(CAM, EGO_SIZE_M)
-SPEED = 50 / 3.6  # [m/s]
-THR = (0.8, 1.2, 1.8, 2.8)  # [s]
-
-
-class MapEstimator:
-    """Returns ``self.tau`` (H, W) camera-plane TTC [s] as hard geofences."""
-
-    dt_s = 0.1
-    tau_range_s = (0.2, 10.0)
-
-    def __init__(self):
-        self.tau = np.full((CAM.height_px, CAM.width_px), np.inf)
-
-    def geofence(self, prev, latest, thresholds_s):
-        t = np.asarray(thresholds_s)[:, None, None]
-        return ((self.tau > 0) & (self.tau <= t)).astype(np.float32)
-
-
-def project(x_fwd_m, y_left_m, z_up_m):
-    """Ego-frame point -> (u, v) px."""
-    p = cam_T_ego(CAM) @ np.array([x_fwd_m, y_left_m, z_up_m, 1.0])
-    fx, fy, cx, cy = CAM.intrinsics()
-    return fx * p[0] / p[2] + cx, fy * p[1] / p[2] + cy
-
-
-def road(speed_mps=SPEED):
-    tau = np.repeat(ground_ttc_per_row(CAL, speed_mps)[:, None], CAM.width_px, axis=1)
-    return tau
-
-
-def add_box(tau, dist_m, lateral_m, tau_s, width_m=1.8, height_m=1.5):
-    """A vertical face ``dist_m`` ahead of the camera, centred ``lateral_m`` to the left."""
-    x = CAM.mount_forward_m + dist_m
-    u_a, v_bottom = project(x, lateral_m + width_m / 2, 0.0)
-    u_b, v_top = project(x, lateral_m - width_m / 2, height_m)
-    u0, u1 = int(math.floor(min(u_a, u_b))), int(math.ceil(max(u_a, u_b)))
-    r0, r1 = int(math.floor(v_top)), int(math.ceil(v_bottom))
-    tau[max(r0, 0) : max(r1, 0), max(u0, 0) : max(u1, 0)] = tau_s
-    return tau
-
-
-def run(tau_map, speed=SPEED, jobs=3, thresholds=THR, cfg=None):
-    est = MapEstimator()
-    # maps per pair; ``cfg``: more GeofenceConfig fields
-    ctrl = GeofenceController(est, GeofenceConfig(thresholds_s=thresholds, frame_stride=1, **(cfg or {})))
-    ctrl.reset(CAL)
-    img = np.zeros((CAM.height_px, CAM.width_px, 3), np.uint8)
-    est.tau = tau_map
-    cmds = [ctrl.act(Observation(0.1 * k, speed, img, img, 0.1, CAL), None) for k in range(jobs)]
-    return cmds
-
-
-def quiet(cmds):
-    return all(c.decel_mps2 == 0 and not c.warning for c in cmds)
+from tests.geofence_maps import CAL, CAM, SPEED, THR, MapEstimator, add_box, quiet, road, run
 
 
 def test_the_road_ahead_alone_is_ignored():
@@ -216,79 +157,6 @@ def test_a_frame_interval_outside_the_trained_range_is_refused():
     fast = Calibration.from_camera(CameraConfig(fps_hz=5.0), EGO_SIZE_M)  # 0.3 s at 0.2 s -> 0.15 s at 0.1 s
     with pytest.raises(ConfigError, match="frame interval 0.2 s"):
         ctrl.reset(fast)
-
-
-FOVEA_CAM = CameraConfig(fovea_zoom=4.0)
-FOVEA_CAL = Calibration.from_camera(FOVEA_CAM, EGO_SIZE_M)
-
-
-class ViewMapEstimator(MapEstimator):
-    """Hard geofences of ``tau`` for the wide view and ``tau_fovea`` for frames marked as the fovea's."""
-
-    def __init__(self):
-        super().__init__()
-        self.tau_fovea = np.full_like(self.tau, np.inf)
-
-    def geofence(self, prev, latest, thresholds_s):
-        tau = self.tau_fovea if latest[0, 0, 0] == 1 else self.tau
-        t = np.asarray(thresholds_s)[:, None, None]
-        return ((tau > 0) & (tau <= t)).astype(np.float32)
-
-
-def fovea_box(dist_m, tau_s, width_m=1.8, height_m=1.5):
-    """The road in the fovea's rows with a face standing ``dist_m`` ahead, in fovea pixels."""
-    cal = FOVEA_CAL.fovea
-    tau = np.repeat(ground_ttc_per_row(cal, SPEED)[:, None], cal.width_px, axis=1)
-    pin, T = FOVEA_CAM.fovea(), cam_T_ego(FOVEA_CAM)
-    x = FOVEA_CAM.mount_forward_m + dist_m
-    (u_a, v_bot), (u_b, v_top) = pin.project(
-        np.array([(T @ [x, width_m / 2, 0.0, 1.0])[:3], (T @ [x, -width_m / 2, height_m, 1.0])[:3]])
-    )
-    tau[int(v_top) : int(math.ceil(v_bot)), int(min(u_a, u_b)) : int(math.ceil(max(u_a, u_b)))] = tau_s
-    return tau
-
-
-def run_two_views(tau_wide, tau_fovea, jobs=3):
-    est = ViewMapEstimator()
-    est.tau, est.tau_fovea = tau_wide, tau_fovea
-    ctrl = GeofenceController(est, GeofenceConfig(thresholds_s=THR, frame_stride=1))
-    ctrl.reset(FOVEA_CAL)
-    wide = np.zeros((CAM.height_px, CAM.width_px, 3), np.uint8)
-    fov = wide.copy()
-    fov[0, 0, 0] = 1
-    return ctrl, [
-        ctrl.act(Observation(0.1 * k, SPEED, wide, wide, 0.1, FOVEA_CAL, fov, fov), None) for k in range(jobs)
-    ]
-
-
-def test_a_target_seen_only_by_the_fovea_fires_in_the_fovea():
-    # 35 m ahead at 50 km/h: a static face at tau 2.5 s, inside the 2.8 s fence, too small for the wide view
-    ctrl, cmds = run_two_views(road(), fovea_box(35.0, 2.5))
-    # the fovea runs the fences from DEFAULT_FOVEA_FENCES_FROM_S (1.4 s) on: 1.8 and 2.8 s
-    assert ctrl.views == ("wide", "fovea") and ctrl.job_thresholds == len(THR) + 2
-    last = cmds[-1].telemetry
-    assert last["fired_view"] == "fovea" and last["fence_fired_s"] == 2.8 and cmds[-1].warning
-    assert last["inpath_px_fovea_2.8s"] > 100 and last["inpath_px_2.8s"] == 0
-    assert cmds[-1].fovea_view is not None and cmds[-1].fovea_view.counted.any()
-
-
-def test_the_most_urgent_view_decides():
-    # the wide view sees the face inside the 1.2 s fence, the fovea only inside 2.8 s: the wide view's stage wins
-    near = add_box(road(), 16.0, 0.0, 1.1)
-    _, cmds = run_two_views(near, fovea_box(35.0, 2.5))
-    assert cmds[-1].telemetry["fired_view"] == "wide" and cmds[-1].telemetry["fence_fired_s"] == 1.2
-    assert cmds[-1].decel_mps2 > 0
-
-
-def test_fences_below_the_fovea_bound_run_on_the_wide_view_only():
-    est = ViewMapEstimator()
-    ctrl = GeofenceController(est, GeofenceConfig(thresholds_s=THR, frame_stride=1, fovea_fences_from_s=1.5))
-    ctrl.reset(FOVEA_CAL)
-    assert ctrl.job_thresholds == 4 + 2  # the 1.8 and 2.8 s fences in the fovea too
-    # a bound above every fence leaves the fovea its largest
-    above = GeofenceController(est, GeofenceConfig(thresholds_s=THR, fovea_fences_from_s=3.0))
-    above.reset(FOVEA_CAL)
-    assert above.view_thresholds == {"wide": 4, "fovea": 1}
 
 
 def test_a_turned_pair_is_derotated_and_counts_only_the_tracker_s_regions():

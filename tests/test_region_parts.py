@@ -42,7 +42,7 @@ def _held(hold_jobs: int, in_path, closing=True, width_px: int = 4):
     from controllers.path_prediction import PathPrediction
     from controllers.track import Obs, Track
     from controllers.tracker import TrackerConfig
-    from tests.test_geofence_controller import CAL, SPEED
+    from tests.geofence_maps import CAL, SPEED
 
     cfg = GeofenceConfig(tracker=TrackerConfig(hold_jobs=hold_jobs, predict_unchecked=True))
     paths = PathPrediction(cfg, {"wide": CAL})

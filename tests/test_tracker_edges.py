@@ -11,7 +11,7 @@ from controllers.evidence import Blob, contact_depth
 from controllers.path_prediction import PathPrediction
 from controllers.track import Obs, Track
 from controllers.tracker import BlobTracker, TrackerConfig
-from tests.test_geofence_controller import CAL
+from tests.geofence_maps import CAL
 
 H, W = 40, 60
 DEPTH = np.linspace(100.0, 2.0, H)  # [m] a stand-in ground depth per row, nearer lower down

@@ -3,7 +3,7 @@ regions of a car oncoming in the ego's path from a pinhole projection in closed 
 
 import numpy as np
 
-import tests.test_geofence_controller as gc
+import tests.geofence_maps as gc
 from controllers.evidence import fenced_blobs
 from controllers.geofence_config import GeofenceConfig
 from controllers.path_prediction import PathPrediction

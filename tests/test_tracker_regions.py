@@ -13,7 +13,7 @@ from controllers.path_prediction import PathPrediction
 from controllers.road import ground_ttc_per_row
 from controllers.tracker import TrackerConfig
 from sim.camera import cam_T_ego
-from tests.test_geofence_controller import (
+from tests.geofence_maps import (
     CAL,
     CAM,
     FOVEA_CAL,
