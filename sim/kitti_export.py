@@ -45,7 +45,6 @@ ELEVATION_DEG = (2.0, -24.9)  # [deg] the top and bottom beams
 AZIMUTH_STEP_DEG = 0.2  # [deg]
 MAX_RANGE_M = 120.0  # [m]
 TRUTH_FILE = "bittc_truth.csv"
-EXPORT_STREAM = 2  # the third seed word of the export's sensor noise (the run's views draw from their own)
 
 
 def native_pinhole(camera: CameraConfig) -> Pinhole:
@@ -112,9 +111,9 @@ class KittiExporter:
         self.truth: list[str] = []
         self.prev = None  # the previous capture (its poses), for the sensor's motion
         if sim.sensor is not None:
-            from sim.sensor import REALISM_STREAM, new_codec
+            from sim.sensor import EXPORT_NOISE_WORD, REALISM_STREAM, new_codec
 
-            self.rng = np.random.default_rng([sim.seed, REALISM_STREAM, EXPORT_STREAM])
+            self.rng = np.random.default_rng([sim.seed, REALISM_STREAM, EXPORT_NOISE_WORD])
             self.codec = new_codec(sim.sensor)
 
     def __call__(self, rec, frame) -> None:
@@ -155,8 +154,17 @@ class KittiExporter:
         prev = self.prev if self.prev is not None else frame_before(self.sim, frame)
         dt = frame.t_s - prev.t_s
         gt = pair_ground_truth(
-            self.pin, r.depth_m, r.instance, frame.cam_T_world, prev.cam_T_world, frame.poses, prev.poses, dt,
-            r.part, frame.part_poses, prev.part_poses,
+            self.pin,
+            r.depth_m,
+            r.instance,
+            frame.cam_T_world,
+            prev.cam_T_world,
+            frame.poses,
+            prev.poses,
+            dt,
+            r.part,
+            frame.part_poses,
+            prev.part_poses,
         )
         return apply_effects(r.rgb, self.sim.sensor, gt.flow_px, dt, self.rng, self.codec)
 

@@ -180,6 +180,10 @@ def apply_effects(
 
 
 REALISM_STREAM = 0x5E_A5  # the second seed word of a clip's sensor draws: its scene's draws stay as they were
+# the third seed word under ``bittc run --realism``: the run's sensor is drawn from [seed,
+# REALISM_STREAM, RUN_EFFECTS_WORD], its KITTI export's own noise from [..., EXPORT_NOISE_WORD]
+RUN_EFFECTS_WORD = 1
+EXPORT_NOISE_WORD = 2
 
 
 def sensor_clip(clip, sample_seed: int, share: float, codecs: tuple[str, ...] = CODECS):

@@ -136,3 +136,42 @@ def test_the_export_goes_through_the_runs_sensor_and_keeps_its_lidar_and_truth(d
         assert np.array_equal(sensed.scan(i), clean.scan(i))  # the lidar sees the exact surface either way
     truth = (tmp_path / "drive" / "bittc_truth.csv").read_text().splitlines()
     assert truth == (drive / "bittc_truth.csv").read_text().splitlines()[: len(truth)]
+
+
+def test_the_export_leaves_the_runs_own_images_as_they_were(tmp_path):
+    """The export draws its sensor noise and codes its video on streams of its own: the
+    frames the controller sees through the same sensor are the same bytes with or without it."""
+    import hashlib
+
+    import scenarios
+    from controllers.base import BrakeCommand, Controller
+    from sim.camera import CameraConfig
+    from sim.latency import parse_latency
+    from sim.runner import run_case
+    from sim.sensor import REALISM_STREAM, RUN_EFFECTS_WORD, draw_effects
+
+    class Seen(Controller):
+        name = "seen"
+        needs_camera = True
+        estimator_kind = "flow"
+        num_alphas = 1
+
+        def __init__(self):
+            self.digests = []
+
+        def act(self, obs, truth):
+            self.digests.append(hashlib.sha1(obs.image_latest.tobytes() + obs.image_prev.tobytes()).hexdigest())
+            return BrakeCommand(decel_mps2=0.0, warning=False)
+
+    (tmp_path / "case.yaml").write_text(CASE.replace("duration_s: 2", "duration_s: 0.6"))
+    case = scenarios.resolve(str(tmp_path / "case.yaml"))[0]
+    sensor = draw_effects(np.random.default_rng([2, REALISM_STREAM, RUN_EFFECTS_WORD]))  # video coded, blurred
+    assert sensor.video_qp is not None and sensor.exposure_s > 0
+    seen = []
+    for export in (None, tmp_path / "drive"):
+        ctrl = Seen()
+        kw = {"latency": parse_latency("fixed:0"), "sensor": sensor, "export_kitti": export}
+        run_case(case, ctrl, CameraConfig(), 2, **kw)
+        seen.append(ctrl.digests)
+    assert len(seen[0]) >= 3 and seen[0] == seen[1]
+    assert len(read_drive(tmp_path / "drive").times_s) == 6

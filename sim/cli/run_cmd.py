@@ -40,7 +40,7 @@ def add_parser(sub) -> argparse.ArgumentParser:
         metavar="DIR",
         help="also write the run in the KITTI raw layout into DIR (new or empty): 375x1242 image_02 (the wide "
         "view's horizontal field of view), a 64-beam velodyne scan ray-cast from the exact depth, calib, "
-        "timestamps, oxts and bittc_truth.csv (one case only)",
+        "timestamps, oxts and bittc_truth.csv (one case only; with --realism the images go through the sensor)",
     )
     add_realism_flag(p)
     add_camera_flags(p)
@@ -63,9 +63,9 @@ def sensor_from_args(args):
         return None
     import numpy as np
 
-    from sim.sensor import REALISM_STREAM, draw_effects
+    from sim.sensor import REALISM_STREAM, RUN_EFFECTS_WORD, draw_effects
 
-    sensor = draw_effects(np.random.default_rng([args.seed, REALISM_STREAM, 1]))
+    sensor = draw_effects(np.random.default_rng([args.seed, REALISM_STREAM, RUN_EFFECTS_WORD]))
     print(f"sensor: {json.dumps(sensor.as_dict())}")
     return sensor
 
