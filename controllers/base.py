@@ -130,6 +130,11 @@ class Observation:
     # (what its yaw-rate sensor integrates to; the simulator gives the exact change); None
     # where unknown (then yaw rate x dt_s)
     pair_yaw_rad: float | None = None
+    # the fovea's capture one frame interval before the latest, where the pair is longer
+    # (``GeofenceConfig.fovea_short_pair``), and the ego's heading change over that interval
+    # [rad] (+ left); None where there is none
+    fovea_prev_short: np.ndarray | None = None
+    short_pair_yaw_rad: float | None = None
 
     def pair(self, view: str) -> tuple[np.ndarray | None, np.ndarray | None]:
         """(prev, latest) images of view 'wide' or 'fovea'."""

@@ -109,6 +109,13 @@ def judged_pixels(tau_ground: np.ndarray, fence: np.ndarray, tau_s: float, cfg) 
     return band & ((rows < edge - cfg.road_edge_rows) | counted_pixels(tau_ground, tau_s, cfg.road_edge_cap))
 
 
+def judged_bands(cal: Calibration, maps: np.ndarray, thr: np.ndarray, speed_mps: float, yaw_rate_radps: float, cfg):
+    """(H, W) bool per fence of ``thr`` (its map in ``maps``): the pixels where it can be
+    judged (``judged_pixels``) on the ground seen at this speed and yaw rate."""
+    tau_ground = ground_ttc_map(cal, speed_mps, yaw_rate_radps)
+    return [judged_pixels(tau_ground, m, tau, cfg) for m, tau in zip(maps, thr)]
+
+
 def corridor_mask(cal: Calibration, counted: np.ndarray, half_w_m: float, depth_m: float, curvature: float):
     """(H, W) bool: the counted pixels in the columns of the ego's corridor at ``depth_m``
     (its width plus margins, bent along the path of curvature ``curvature`` [1/m]:

@@ -86,24 +86,23 @@ enough to fill a view may fail every test above while it is still ahead. Below
 ``min_speed_mps`` the controller neither warns nor brakes.
 
 **Frame stride** (``frame_stride``, default ``DEFAULT_FRAME_STRIDE`` = 3): the pair is the
-latest frame and the one captured three frames before it (0.3 s at 10 Hz), so a target's
+latest frame and the one captured three frames before it (0.3 s at 10 Hz): a target's
 outline moves three times as far per pair at no extra compute (the estimator caches every
-frame's features). The network's error in the scale ratio eta is roughly fixed, while
-1 - eta = pair interval / (tau + pair interval) shrinks with tau: a wider pair keeps the
-far fences steady, at the price of reading the last 0.3 s of motion (measured:
-docs/fovea_training.md, ``docs/controller_levers.py``).
+frame's features). The network's error in eta is roughly fixed, while 1 - eta = pair
+interval / (tau + pair interval) shrinks with tau: a wider pair keeps the far fences
+steady (docs/fovea_training.md, ``docs/controller_levers.py``).
 
 **Two views** (a calibration with a ``fovea``): the same rules run on each view with its
 own calibration and estimator cache; tau_hat is the smallest threshold fired in either
-view. ``fovea_fences_from_s`` keeps the fences below it on the wide view only: by default
-those under 1.4 s (at K = 4 the fovea runs the 1.84 and 2.8 s fences; it sees the
-corridor from about 15 m on, where the wide view decides the short fences: docs/fovea.md).
+view. ``fovea_fences_from_s`` keeps the fences below it on the wide view only (by default
+under 1.4 s: at K = 4 the fovea runs the 1.84 and 2.8 s fences; docs/fovea.md). With
+``fovea_short_pair`` the fovea's smallest fence is also read on the pair one frame apart,
+where a crossing road user moves a third as far (``controllers.short_pair``).
 
-**Thresholds**: explicit (any order, each within the estimator's trained range), or
-``default_thresholds(K)``: K values spaced uniformly in log tau over
-``DEFAULT_TAU_RANGE_S`` (0.8-2.8 s; K = 1: their geometric mean, 1.5 s). With a frame
-stride n the pair spans n frame intervals; a threshold tau then asks the estimator for
-the same eta = tau / (tau + n dt) as tau * dt_est / (n dt) at its own trained interval.
+**Thresholds**: explicit (any order, within the estimator's trained range), or
+``default_thresholds(K)``: K values uniform in log tau over ``DEFAULT_TAU_RANGE_S``
+(0.8-2.8 s; K = 1: 1.5 s). On a pair n frame intervals long a threshold tau asks the
+estimator for the same eta = tau / (tau + n dt) as tau * dt_est / (n dt).
 """
 
 from __future__ import annotations
@@ -115,7 +114,7 @@ import numpy as np
 
 from controllers.base import BrakeCommand, Calibration, Controller, GeofenceView, Observation
 from controllers.derotate import derotate
-from controllers.evidence import ground_ttc_map, in_path_evidence, judged_pixels
+from controllers.evidence import in_path_evidence, judged_bands
 from controllers.geofence_config import (  # noqa: F401  (re-exported: the controller's settings)
     DEFAULT_FOVEA_FENCES_FROM_S,
     DEFAULT_FRAME_STRIDE,
@@ -130,7 +129,8 @@ from controllers.geofence_config import (  # noqa: F401  (re-exported: the contr
     frame_stride_ok,
 )
 from controllers.path_prediction import PathPrediction
-from controllers.stages import StagedBrake, fence_stages
+from controllers.short_pair import read_fences
+from controllers.stages import StagedBrake, fence_stages, fired_fences
 
 
 class GeofenceController(Controller):
@@ -155,7 +155,9 @@ class GeofenceController(Controller):
 
     @property
     def view_thresholds(self) -> dict[str, int]:
-        return {v: len(f) for v, f in self._fences.items()} if self.cal is not None else {"wide": self.num_alphas}
+        if self.cal is None:
+            return {"wide": self.num_alphas}
+        return {v: len(f) + (v == self._short_view) for v, f in self._fences.items()}
 
     def reset(self, calibration: Calibration) -> None:
         self.cal = calibration
@@ -164,6 +166,12 @@ class GeofenceController(Controller):
         self._thr_est = estimator_thresholds(self.estimator, self._thr, calibration.frame_dt_s, self.frame_stride)
         # fence indices (into the sorted thresholds) evaluated per view
         self._fences = self.cfg.fences(self._cals)
+        # the view whose smallest fence is also read on the pair one frame apart (short_pair)
+        short = self.cfg.fovea_short_pair and self.frame_stride > 1 and "fovea" in self._fences
+        self._short_view = "fovea" if short else None
+        if short:
+            small = self._thr[self._fences["fovea"][:1]]
+            self._thr_short = float(estimator_thresholds(self.estimator, small, calibration.frame_dt_s, 1)[0])
         if "fovea" in self._cals:
             if "fovea" not in self._estimators:
                 fork = getattr(self.estimator, "fork", None)
@@ -183,31 +191,17 @@ class GeofenceController(Controller):
         self._last = BrakeCommand()
         self._contact_by_s = -math.inf  # [s] the last braking stage's bound on the contact time
 
-    def _bands(self, view: str, maps: np.ndarray, thr: np.ndarray, speed_mps: float, yaw_rate: float) -> list:
-        """(H, W) bool per fence of ``thr`` (its map in ``maps``): the pixels where it can be
-        judged (rule 2)."""
-        tau_ground = ground_ttc_map(self._cals[view], speed_mps, yaw_rate)
-        return [judged_pixels(tau_ground, m, tau, self.cfg) for m, tau in zip(maps, thr)]
-
-    def _fired(self, view: str, sizes: np.ndarray) -> np.ndarray:
-        """In-path region sizes of a view's fences -> which fences fire (nested, persistent)."""
-        hits = sizes >= self.cfg.min_region_px
-        if self.cfg.nested:  # what is inside tau_i is inside every larger fence too
-            larger = np.append(np.logical_or.accumulate(hits[::-1])[::-1][1:], True)
-            hits &= larger
-        self._streak[view] = np.where(hits, self._streak[view] + 1, 0)
-        return self._streak[view] >= self.cfg.persistence_frames
-
-    def _estimate(self, obs: Observation, s: float, yaw: float) -> tuple[dict, float, list[str]]:
+    def _estimate(self, obs: Observation, s: float, yaw: float) -> tuple[dict, float, list[str], list[str]]:
         """Every view's geofences and counted pixels, its regions handed to the tracker
         first (the fovea checks the wide view's) -> (view -> (maps, counted pixels per
         fence or None, whether the corridor rule holds), estimator time [ms], the views
-        whose earlier frame was derotated: the network extracted it anew)."""
+        whose earlier frame was derotated: the network extracted it anew, the views that
+        read the shorter pair too)."""
         c = self.cfg
         # the pair's rotation: the fastest yaw rate of the jobs within it, times its interval
         self._yaws = [(t, w) for t, w in self._yaws if t >= obs.t_s - obs.dt_s - 1e-6] + [(obs.t_s, abs(yaw))]
         turn_rad = max(w for _, w in self._yaws) * obs.dt_s
-        est_ms, jobs, derotated = 0.0, {}, []
+        est_ms, jobs, derotated, shorts = 0.0, {}, [], []
         for v, idx in self._fences.items():
             prev, latest = obs.pair(v)
             if latest is None or prev is None:
@@ -220,16 +214,19 @@ class GeofenceController(Controller):
             if rotate:
                 prev = derotate(prev, latest, self._cals[v], obs.pair_rotation_rad)
                 derotated.append(v)
-            maps = self._estimators[v].geofence(prev, latest, self._thr_est[idx])
+            short_thr = self._thr_short if v == self._short_view else None
+            maps, tag = read_fences(
+                self._estimators[v], obs, v, prev, self._cals[v], c, rotate, self._thr_est[idx], short_thr
+            )
+            shorts += [tag] if tag else []
             est_ms += (time.perf_counter() - t0) * 1e3
-            if not turned:
-                bands = self._bands(v, maps, self._thr[idx], s, yaw)
-            else:
-                bands = self._bands(v, maps, self._thr[idx], s, 0.0) if rotate else None
+            # where it turned, the ground of a derotated pair has the translation alone
+            w = 0.0 if turned else yaw
+            bands = None if turned and not rotate else judged_bands(self._cals[v], maps, self._thr[idx], s, w, c)
             jobs[v] = (maps, bands, not turned)
             # a view that turned too far without derotation gives none: its tracks age by a job
             self._paths.observe(v, maps, self._thr[idx], bands, s, obs.t_s)
-        return jobs, est_ms, derotated
+        return jobs, est_ms, derotated, shorts
 
     def act(self, obs: Observation, truth) -> BrakeCommand:
         if self.cal is None:
@@ -237,7 +234,7 @@ class GeofenceController(Controller):
         c, s = self.cfg, float(obs.ego_speed_mps)
         yaw = float(obs.ego_yaw_rate_radps)
         self._paths.start_job(obs.t_s, s, yaw)
-        jobs, est_ms, derotated = self._estimate(obs, s, yaw)
+        jobs, est_ms, derotated, shorts = self._estimate(obs, s, yaw)
         tel: dict = {}
         views: dict[str, GeofenceView] = {}
         fired_at: dict[str, float] = {}  # view -> smallest fired threshold [s]
@@ -256,7 +253,7 @@ class GeofenceController(Controller):
                 )
                 n_pred = int(predicted.any())
             tel[f"predicted_{v}"] = n_pred
-            fired = self._fired(v, sizes)
+            fired, self._streak[v] = fired_fences(sizes, self._streak[v], c)
             if fired.any():
                 fired_at[v] = float(thr[np.argmax(fired)])
             tag = "" if v == "wide" else f"{v}_"
@@ -291,6 +288,7 @@ class GeofenceController(Controller):
             "fence_fired_s": tau_hat if tau_hat is not None else "",
             "fired_view": "+".join(v for v in self._fences if v in fired_views),
             "derotated": "+".join(derotated),  # views whose earlier frame the network extracted anew
+            "short_pair": "+".join(shorts),  # views whose smallest fence read the pair one frame apart too
             "stage": stage,
             **tel,
         }

@@ -108,6 +108,11 @@ class GeofenceConfig:
     # regions count in that job; otherwise the view gives no evidence then
     max_rotation_px: float = 12.0
     derotate: bool = True
+    # the fovea's smallest fence is also read on the pair one frame apart (where the
+    # observation has it and the stride is longer): a pixel is inside where either pair puts
+    # it. A road user crossing moves a third as far sideways there, within what the scale
+    # warp about the image centre aligns (controllers.short_pair)
+    fovea_short_pair: bool = True
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "thresholds_s", check_thresholds(self.thresholds_s))

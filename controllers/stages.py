@@ -96,3 +96,16 @@ def fence_stages(
         for T in (cfg.warn_ttc_s, cfg.partial_ttc_s, cfg.full_ttc_s)
     ]
     return reached, speed_mps / (2 * max(tau_hat_s - offset_s, 0.05))
+
+
+def fired_fences(sizes: np.ndarray, streak: np.ndarray, cfg) -> tuple[np.ndarray, np.ndarray]:
+    """In-path region sizes [px] of a view's fences (from the smallest up) and their streaks
+    of consecutive jobs -> (which fences fire, the new streaks): a fence hits with a region
+    of ``cfg.min_region_px``; with ``cfg.nested`` only where a larger fence hits too (what
+    lies inside tau_i lies inside every larger fence); it fires after
+    ``cfg.persistence_frames`` hits in a row."""
+    hits = sizes >= cfg.min_region_px
+    if cfg.nested:
+        hits &= np.append(np.logical_or.accumulate(hits[::-1])[::-1][1:], True)
+    streak = np.where(hits, streak + 1, 0)
+    return streak >= cfg.persistence_frames, streak

@@ -1,5 +1,6 @@
 """What a scenario run hands out: the captured ``Frame``, the ground truth ``StepTruth`` at
-it, and the ``Collision`` that ends the run."""
+it, and the ``Collision`` that ends the run; and the closed loop's ``FrameRecord`` of each
+captured frame (``sim.loop``)."""
 
 from __future__ import annotations
 
@@ -12,6 +13,8 @@ from sim.actor_truth import ActorTruth
 from sim.ground_truth import GroundTruth
 
 if TYPE_CHECKING:  # the world imports PyBullet, which a run without a camera never needs
+    from controllers.base import BrakeCommand
+    from sim.latency import JobWork
     from sim.world import Render
 
 
@@ -68,3 +71,23 @@ class Frame:
         if self.fovea is None:
             return None, None, None
         return self.fovea.rgb, self.fovea.depth_m, self.fovea.instance
+
+
+@dataclass
+class FrameRecord:
+    """One captured frame: what happened to it, and the state at its capture."""
+
+    index: int
+    t_s: float  # [s] capture time
+    ego_speed_mps: float
+    ego_accel_mps2: float
+    truth: StepTruth  # ground truth at capture (never shown to a deployable policy)
+    active: BrakeCommand  # the command in effect at capture
+    status: str = "pending"  # processed | skipped | unpaired | unused (see the module docstring)
+    latency_s: float | None = None  # [s] estimator latency of its job
+    wait_s: float | None = None  # [s] from capture to the start of its job
+    decided: BrakeCommand | None = None  # its job's command
+    work: JobWork | None = None  # what its job computed (what a profile charges)
+    fence_cover: dict = field(default_factory=dict)  # view -> threshold '<s>' -> share of the critical actor inside
+    ego_yaw_rate_radps: float = 0.0  # [rad/s] + left, as the car's yaw-rate sensor reads it
+    ego_heading_rad: float = 0.0  # [rad] + left, exact (what the car's yaw-rate sensor integrates to)

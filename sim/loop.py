@@ -33,12 +33,13 @@ import math
 import time
 from collections import defaultdict
 from collections.abc import Callable
-from dataclasses import dataclass, field, replace
+from dataclasses import replace
 
 import cv2
 
 from controllers.base import BrakeCommand, Calibration, Controller, Observation
 from sim.episode import Frame, ScenarioSim, StepTruth
+from sim.episode_records import FrameRecord
 from sim.fence_lag import FenceLagMeter
 from sim.ground_truth import GroundTruth
 from sim.latency import (
@@ -55,26 +56,6 @@ from sim.latency import (
 from sim.vehicles import EGO_SIZE_M
 
 cv2.setNumThreads(1)  # OpenCV's own pool would contend with the estimator's torch threads
-
-
-@dataclass
-class FrameRecord:
-    """One captured frame: what happened to it, and the state at its capture."""
-
-    index: int
-    t_s: float  # [s] capture time
-    ego_speed_mps: float
-    ego_accel_mps2: float
-    truth: StepTruth  # ground truth at capture (never shown to a deployable policy)
-    active: BrakeCommand  # the command in effect at capture
-    status: str = "pending"  # processed | skipped | unpaired | unused (see the module docstring)
-    latency_s: float | None = None  # [s] estimator latency of its job
-    wait_s: float | None = None  # [s] from capture to the start of its job
-    decided: BrakeCommand | None = None  # its job's command
-    work: JobWork | None = None  # what its job computed (what a profile charges)
-    fence_cover: dict = field(default_factory=dict)  # view -> threshold '<s>' -> share of the critical actor inside
-    ego_yaw_rate_radps: float = 0.0  # [rad/s] + left, as the car's yaw-rate sensor reads it
-    ego_heading_rad: float = 0.0  # [rad] + left, exact (what the car's yaw-rate sensor integrates to)
 
 
 class ClosedLoop:
@@ -148,6 +129,8 @@ class ClosedLoop:
         latest = self._frames.get(job.frame)
         prev = self._frames.get(job.frame - self.stride) if self.pairs else None
         fovea = (latest.fovea, prev.fovea if prev is not None else None) if latest is not None else (None, None)
+        # the fovea one frame interval before the latest, for a controller that reads a shorter pair too
+        short = self._frames.get(job.frame - 1) if self.pairs and self.stride > 1 and fovea[0] is not None else None
         return Observation(
             rec.t_s,
             rec.ego_speed_mps,
@@ -159,11 +142,14 @@ class ClosedLoop:
             fovea[1].rgb if fovea[1] is not None else None,
             rec.ego_yaw_rate_radps,
             self._pair_yaw_rad(job.frame) if prev is not None else None,
+            short.fovea.rgb if short is not None and short.fovea is not None else None,
+            self._pair_yaw_rad(job.frame, 1) if short is not None else None,
         )
 
-    def _pair_yaw_rad(self, frame: int) -> float:
-        """[rad] + left: the ego's heading change from frame ``frame - stride`` to ``frame``."""
-        turn = self.records[frame].ego_heading_rad - self.records[frame - self.stride].ego_heading_rad
+    def _pair_yaw_rad(self, frame: int, stride: int | None = None) -> float:
+        """[rad] + left: the ego's heading change from frame ``frame - stride`` (default the
+        loop's) to ``frame``."""
+        turn = self.records[frame].ego_heading_rad - self.records[frame - (stride or self.stride)].ego_heading_rad
         return math.remainder(turn, math.tau)
 
     def truth_at(self, job: Job) -> StepTruth:
@@ -206,6 +192,11 @@ class ClosedLoop:
         pair = (frame - self.stride, frame) if self.pairs else (frame,)
         work = JobWork.of_views(self.view_thresholds, self._pixel_share, self.estimator, self._cache.extractions(pair))
         warped = [v for v in str(cmd.telemetry.get("derotated", "")).split("+") if v in self._pixel_share]
+        # a view that read the shorter pair too: its earlier frame where not cached, or warped
+        for tag in filter(None, str(cmd.telemetry.get("short_pair", "")).split("+")):
+            v, rotated = tag.removesuffix("-derotated"), tag.endswith("-derotated")
+            if v in self._pixel_share and (rotated or self._cache.extractions((frame - 1,))):
+                warped.append(v)
         if not warped:
             return work
         return replace(work, extractions=work.extractions + sum(self._pixel_share[v] for v in warped))

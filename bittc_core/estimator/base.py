@@ -126,6 +126,26 @@ class Estimator(ABC):
         thr = as_thresholds(thresholds_s, self.tau_range_s, sorted_=False)
         return self._geofence(prev, latest, tau_to_eta(thr, self.dt_s))
 
+    def geofence_pairs(self, images_prev, image_latest, thresholds_s) -> np.ndarray:
+        """(K, H, W) float32 p(0 < tau <= tau_i), threshold i read on the pair
+        (``images_prev[i]``, ``image_latest``): fences of one frame read on pairs of
+        different intervals (each threshold in this estimator's own time base). Here each
+        distinct earlier frame (the same object) is read in a call of its own; the network
+        reads them all in one."""
+        if len(images_prev) != len(thresholds_s):
+            raise EstimatorInputError(
+                f"geofence_pairs: {len(images_prev)} earlier frames for {len(thresholds_s)} thresholds"
+            )
+        groups: dict[int, list[int]] = {}
+        for i, image in enumerate(images_prev):
+            groups.setdefault(id(image), []).append(i)
+        out: list[np.ndarray | None] = [None] * len(thresholds_s)
+        for idx in groups.values():
+            maps = self.geofence(images_prev[idx[0]], image_latest, [thresholds_s[i] for i in idx])
+            for m, i in zip(maps, idx):
+                out[i] = m
+        return np.stack(out)
+
     def quantized(self, image_prev, image_latest, thresholds_s) -> np.ndarray:
         """(H, W) int64 bin index over strictly increasing thresholds (see ``quantize``)."""
         prev, latest = as_image_pair(image_prev, image_latest)

@@ -27,6 +27,7 @@ __all__ = ["BittcEstimator", "CACHED_FRAMES", "TTA_MODES", "check_tta"]
 class BittcEstimator(StreamingNetEstimator):
     name = "bittc"
     backend = "torch"
+    sources_per_threshold = True
 
     def __init__(self, net: BinaryTTCNet, *, device: torch.device | None = None, tta: str = "none") -> None:
         cfg = net.config

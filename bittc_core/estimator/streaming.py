@@ -31,8 +31,9 @@ from typing import Any
 import numpy as np
 import torch
 
-from bittc_core.estimator.base import Estimator, EstimatorInputError
+from bittc_core.estimator.base import Estimator, EstimatorInputError, as_image_pair, as_thresholds
 from bittc_core.model.flip import flip_views, merge_flip_views
+from bittc_core.ttc import tau_to_eta
 
 #: frames whose features the cache holds: the least recently used is evicted, so a stream of
 #: pairs (k - n, k) for every k (four frames touched between two uses of frame k - n at n = 3)
@@ -51,6 +52,9 @@ class StreamingNetEstimator(Estimator):
     """The network behind the estimator interface, with the streaming cache."""
 
     cached_frames = CACHED_FRAMES  # frames whose features the cache holds
+    # the backend classifies each threshold on an earlier frame of its own in one call
+    # (``geofence_pairs``); otherwise one call per earlier frame
+    sources_per_threshold = False
 
     def __init__(
         self, *, dt_s: float, tau_range_s: tuple[float, float], device: torch.device, tta: str = "none"
@@ -153,6 +157,28 @@ class StreamingNetEstimator(Estimator):
         views = self._reference[0].shape[0]
         eta_t = torch.as_tensor(eta, dtype=torch.float32, device=self.device)[None].expand(views, -1)
         logits = self._classify(ctx, feat_prev, eta_t)
+        return torch.sigmoid(self._merge(logits)).float().cpu().numpy()
+
+    def geofence_pairs(self, images_prev, image_latest, thresholds_s) -> np.ndarray:
+        if not self.sources_per_threshold or len(images_prev) != len(thresholds_s):
+            return super().geofence_pairs(images_prev, image_latest, thresholds_s)
+        pairs = [as_image_pair(p, image_latest) for p in images_prev]
+        thr = as_thresholds(thresholds_s, self.tau_range_s, sorted_=False)
+        return self._geofence_pairs([p for p, _ in pairs], pairs[0][1], tau_to_eta(thr, self.dt_s))
+
+    @torch.inference_mode()
+    def _geofence_pairs(self, prevs: list[torch.Tensor], latest: torch.Tensor, eta: np.ndarray) -> np.ndarray:
+        """Each threshold on its own earlier frame, one classify call: the earlier frames'
+        features (from the cache where the pixels match) stacked per threshold."""
+        feats = []
+        ctx = None
+        for prev in prevs:
+            ctx, feat_prev = self._prepare(prev, latest)  # the reference is made once
+            feats.append(feat_prev)
+        views = self._reference[0].shape[0]
+        feat_src = torch.stack(feats, dim=1).flatten(0, 1)  # (V*K, C, h, w), batch-major
+        eta_t = torch.as_tensor(eta, dtype=torch.float32, device=self.device)[None].expand(views, -1)
+        logits = self._classify(ctx, feat_src, eta_t)
         return torch.sigmoid(self._merge(logits)).float().cpu().numpy()
 
     @torch.inference_mode()

@@ -120,6 +120,8 @@ class BinaryTTCNet(nn.Module):
 
     def classify_eta(self, ctx: ReferenceContext, feat_src: torch.Tensor, eta: torch.Tensor) -> torch.Tensor:
         """eta thresholds (B, K) -> refined logits of p(eta <= eta_i), (B, K, H, W).
+        ``feat_src``: the earlier frame's features (B, C, h, w), or one earlier frame per
+        threshold (B*K, C, h, w, batch-major: each threshold read on its own pair).
 
         In eval mode on a CPU the hypotheses go through SegNet ``CPU_INFERENCE_HYPOTHESES``
         at a time (exact: eval-mode batch norm treats samples independently); in training
@@ -129,14 +131,18 @@ class BinaryTTCNet(nn.Module):
             raise ValueError("classify_eta: no eta thresholds")
         chunk = CPU_INFERENCE_HYPOTHESES if not self.training and eta.device.type == "cpu" else k
         refined = []
+        per_threshold = k > 1 and feat_src.shape[0] == b * k
         for start in range(0, k, chunk):
             part = eta[:, start : start + chunk]
-            warped = scale_warp(feat_src, part, ctx.grid)
+            src = feat_src
+            if per_threshold:
+                src = feat_src.unflatten(0, (b, k))[:, start : start + chunk].flatten(0, 1)
+            warped = scale_warp(src, part, ctx.grid)
             corr = None
             if self.config.corr_groups:
                 corr = scale_correlation(
                     ctx.terms.feat,
-                    feat_src,
+                    src,
                     part,
                     warped,
                     ctx.grid,

@@ -67,17 +67,17 @@ def _repeat_per_hypothesis(src: torch.Tensor, k: int) -> torch.Tensor:
 
 
 def scale_warp(src: torch.Tensor, eta: torch.Tensor, grid: PaddedGrid, unpadded: bool = False) -> torch.Tensor:
-    """Scale ``src`` (B, C, h, w) about its centre for each eta (B, K) -> (B*K, C, hp, wp),
-    or only the unpadded part of that, (B*K, C, h, w), with ``unpadded``."""
+    """Scale ``src`` (B, C, h, w), or one source per hypothesis (B*K, C, h, w, batch-major),
+    about its centre for each eta (B, K) -> (B*K, C, hp, wp), or only the unpadded part of
+    that, (B*K, C, h, w), with ``unpadded``."""
     b, k = eta.shape
     base = grid.base_grid(src.device, src.dtype)  # (hp, wp, 2)
     if unpadded:
         base = base[grid.top : grid.top + grid.h, grid.left : grid.left + grid.w]
     # normalised coords are centred on c, so c + eta (x - c) -> eta * n(x)
     sample = eta.reshape(b * k, 1, 1, 1).to(src.dtype) * base
-    return F.grid_sample(
-        _repeat_per_hypothesis(src, k), sample, mode="bilinear", padding_mode="zeros", align_corners=True
-    )
+    src_k = src if src.shape[0] == b * k else _repeat_per_hypothesis(src, k)
+    return F.grid_sample(src_k, sample, mode="bilinear", padding_mode="zeros", align_corners=True)
 
 
 def shift_warp(src: torch.Tensor, shift_feat: torch.Tensor, grid: PaddedGrid) -> torch.Tensor:
