@@ -111,8 +111,9 @@ class GeofenceConfig:
     # the fovea's smallest fence is also read on the pair one frame apart (where the
     # observation has it and the stride is longer): a pixel is inside where either pair puts
     # it. A road user crossing moves a third as far sideways there, within what the scale
-    # warp about the image centre aligns (controllers.short_pair)
-    fovea_short_pair: bool = True
+    # warp about the image centre aligns (controllers.short_pair). Off by default: it costs
+    # a threshold a job, and braking 0.01 s later hits two cases harder (docs/vru.md)
+    fovea_short_pair: bool = False
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "thresholds_s", check_thresholds(self.thresholds_s))

@@ -20,6 +20,8 @@ pair, eta = tau / (tau + pair interval), which lies below eta_i exactly when tau
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 
 from bittc_core.estimator import OracleEstimator
@@ -54,6 +56,8 @@ class ExactFenceController(GeofenceController):
     uses_pixel_truth = True
 
     def __init__(self, cfg: GeofenceConfig | None = None, name: str = "geofence-exact") -> None:
+        # exact fences do not depend on the pair: a shorter one adds nothing
+        cfg = dataclasses.replace(cfg or GeofenceConfig(), fovea_short_pair=False)
         super().__init__(ExactFences(), cfg, name=name)
 
     def reset(self, calibration: Calibration) -> None:

@@ -17,6 +17,7 @@ def _config(
     road_edge_rows: int | None = None,
     turn_across: bool | None = None,
     oncoming: bool | None = None,
+    fovea_short_pair: bool | None = None,
 ) -> GeofenceConfig:
     thr = tuple(thresholds_s) if thresholds_s is not None else default_thresholds(4)
     kw = {} if frame_stride is None else {"frame_stride": frame_stride}
@@ -24,6 +25,8 @@ def _config(
         kw["fovea_fences_from_s"] = float(fovea_fences_from_s)
     if road_edge_rows is not None:
         kw["road_edge_rows"] = road_edge_rows
+    if fovea_short_pair is not None:
+        kw["fovea_short_pair"] = bool(fovea_short_pair)
     tracker = {k: bool(v) for k, v in (("turn_across", turn_across), ("oncoming", oncoming)) if v is not None}
     if tracker:
         kw["tracker"] = TrackerConfig(**tracker)
@@ -42,6 +45,7 @@ def make_geofence(
     road_edge_rows: int | None = None,
     turn_across: bool | None = None,
     oncoming: bool | None = None,
+    fovea_short_pair: bool | None = None,
 ) -> GeofenceController:
     """The shipped network (or ``weights``) behind the geofence controller; ``backend=
     "onnxruntime", onnx=DIR``: the same weights exported to ``DIR`` (checked against them)."""
@@ -52,7 +56,9 @@ def make_geofence(
         est = make_estimator("bittc", weights=weights or DEFAULT_WEIGHTS, backend=backend, onnx=onnx)
     else:
         est = make_estimator("bittc", weights=weights, device=device, backend=backend, onnx=onnx)
-    cfg = _config(thresholds_s, frame_stride, fovea_fences_from_s, road_edge_rows, turn_across, oncoming)
+    cfg = _config(
+        thresholds_s, frame_stride, fovea_fences_from_s, road_edge_rows, turn_across, oncoming, fovea_short_pair
+    )
     return GeofenceController(est, cfg, name=name)
 
 
@@ -64,11 +70,14 @@ def make_flow(
     road_edge_rows: int | None = None,
     turn_across: bool | None = None,
     oncoming: bool | None = None,
+    fovea_short_pair: bool | None = None,
 ) -> GeofenceController:
     """The DIS + affine-expansion baseline behind the same controller logic."""
     from bittc_core.estimator import make_estimator
 
-    cfg = _config(thresholds_s, frame_stride, fovea_fences_from_s, road_edge_rows, turn_across, oncoming)
+    cfg = _config(
+        thresholds_s, frame_stride, fovea_fences_from_s, road_edge_rows, turn_across, oncoming, fovea_short_pair
+    )
     return GeofenceController(make_estimator("flow"), cfg, name=name)
 
 
@@ -80,9 +89,12 @@ def make_geofence_exact(
     road_edge_rows: int | None = None,
     turn_across: bool | None = None,
     oncoming: bool | None = None,
+    fovea_short_pair: bool | None = None,
 ) -> GeofenceController:
     """The same policy on the exact fences of the per-pixel ground truth (not deployable)."""
     from controllers.geofence_exact import ExactFenceController
 
-    cfg = _config(thresholds_s, frame_stride, fovea_fences_from_s, road_edge_rows, turn_across, oncoming)
+    cfg = _config(
+        thresholds_s, frame_stride, fovea_fences_from_s, road_edge_rows, turn_across, oncoming, fovea_short_pair
+    )
     return ExactFenceController(cfg, name=name)

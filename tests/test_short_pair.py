@@ -71,6 +71,7 @@ def run_fovea(short_pair: bool, give_short: bool = True, jobs: int = 3):
     # inside the 1.84 s fence only on the shorter one
     est.tau, est.tau_fovea, est.tau_short = road(), fovea_box(33.0, 2.5), fovea_box(33.0, 1.7)
     ctrl = GeofenceController(est, GeofenceConfig(thresholds_s=THR, fovea_short_pair=short_pair))
+    assert not GeofenceConfig().fovea_short_pair  # off by default
     ctrl.reset(FOVEA_CAL)
     wide = np.zeros((CAM.height_px, CAM.width_px, 3), np.uint8)
     latest, prev, short = wide.copy(), wide.copy(), wide.copy()
@@ -127,3 +128,32 @@ def test_the_loop_hands_over_the_fovea_one_frame_back():
         for before, o in zip(obs, obs[1:]):  # every frame processed: the job before saw it as its latest
             assert np.array_equal(o.fovea_prev_short, before.fovea_latest) and o.short_pair_yaw_rad == 0.0
             assert not np.array_equal(o.fovea_prev_short, o.fovea_prev)
+
+
+def test_a_profile_charges_the_shorter_pair_as_one_threshold_and_its_frame_once(tmp_path):
+    import controllers
+    import scenarios
+    from sim.camera import CameraConfig
+    from sim.latency import JobWork, named_profiles, parse_latency
+    from sim.runner import run_case
+
+    prof = named_profiles()["this-cpu"]
+    ctrl = controllers.make("geofence", thresholds_s=(1.0, 2.0), fovea_short_pair=True)  # the fovea: its 2 s fence
+    s = run_case(
+        scenarios.resolve("CCRs-20")[0],
+        ctrl,
+        CameraConfig(fovea_zoom=2.0),
+        0,
+        tmp_path / "r",
+        latency=parse_latency("profile:this-cpu"),
+    )
+    rows = (tmp_path / "r" / "trace.csv").read_text().splitlines()
+    col, short = rows[0].split(",").index("latency_ms"), rows[0].split(",").index("short_pair")
+    lat = {float(r.split(",")[col]) for r in rows[1:] if r.split(",")[col]}
+    assert {r.split(",")[short] for r in rows[1:] if r.split(",")[col]} == {"fovea"}
+    # the fovea (half as wide: its thresholds and extractions count half) reads its 2 s fence on two pairs
+    steady = prof.latency_ms(JobWork("bittc", 2, 2 + 0.5 * 2, 1 + 0.5))  # one new frame per view
+    first = prof.latency_ms(JobWork("bittc", 2, 2 + 0.5 * 2, 2 + 1))  # both frames of the first pairs
+    # the first job also extracts the fovea's frame one interval back, which no job had used
+    very_first = prof.latency_ms(JobWork("bittc", 2, 2 + 0.5 * 2, 2 + 1 + 0.5))
+    assert lat == {round(steady, 2), round(first, 2), round(very_first, 2)} and s["frames_skipped"] == 0

@@ -77,6 +77,13 @@ def add_controller_flags(p: argparse.ArgumentParser, default: str | None = None)
         default=None,
         help="geofence/flow: with the turn rules, the tracker's rules for oncoming traffic (docs/vru.md; default on)",
     )
+    p.add_argument(
+        "--fovea-short-pair",
+        action=argparse.BooleanOptionalAction,
+        default=None,
+        help="geofence/flow with a fovea: also read the fovea's smallest fence on the pair one frame apart, "
+        "where a crossing road user moves a third as far (docs/vru.md; costs a threshold a job; default off)",
+    )
     from sim.cli.common import add_backend_flags
 
     add_backend_flags(p)
@@ -120,6 +127,8 @@ def controller_from_args(args, camera):
         settings["turn_across"] = args.turn_across
     if args.oncoming is not None:
         settings["oncoming"] = args.oncoming
+    if args.fovea_short_pair is not None:
+        settings["fovea_short_pair"] = args.fovea_short_pair
     if args.weights is not None:
         if name != "geofence":
             raise CliError(f"--weights applies to the geofence controller, not {name!r}")
@@ -133,7 +142,7 @@ def controller_from_args(args, camera):
     if settings and name in controllers.REGISTRY and not takes_fences:
         raise CliError(
             "--num-alphas / --ttc-thresholds / --frame-stride / --fovea-fences-from / --road-edge-rows / "
-            f"--[no-]turn-across / --[no-]oncoming apply to "
+            f"--[no-]fovea-short-pair / --[no-]turn-across / --[no-]oncoming apply to "
             f"{' and '.join(controllers.ESTIMATOR_CONTROLLERS)}, not {name!r}"
         )
     try:
