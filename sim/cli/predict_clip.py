@@ -68,8 +68,6 @@ class _ClipRun:
     thr_est: np.ndarray
     rois: dict
     ctrl: object = None
-    # each frame's partner one network interval back (the controller's shorter pair), if any
-    partner_short: np.ndarray | None = None
     calibration: object = None
     motion: tuple | None = None  # per frame (speed [m/s], yaw rate [rad/s], + left) from --oxts
     first: dict = field(default_factory=lambda: {"warning": None, "brake": None})
@@ -110,11 +108,6 @@ def _prepare(args, size, zoom) -> _ClipRun:
     rois = {v: roi_in_view(args.roi, box, hw) for v, (box, hw) in views.items()}
     step = float(np.median(np.diff(clip.times_s)))
     run = _ClipRun(args, clip, est, views, cams, stride, est.dt_s * stride, partner, step, thr, thr_est, rois)
-    if stride > 1:  # footage too sparse for one interval reads the stride's pair alone
-        try:
-            run.partner_short = pair_frames(clip.times_s, est.dt_s)
-        except FootageError:
-            pass
     if args.oxts is not None:
         from sim.kitti_raw import read_oxts
 
@@ -165,7 +158,7 @@ def _frame_loop(run: _ClipRun, video) -> list[dict]:
         row = {"frame": i, "t_s": round(float(times[i]), 6), "prev_frame": j}
         row["pair_dt_s"] = round(float(times[i] - times[j]), 6)
         if run.ctrl is not None:
-            pictures, lines, alert = controller_step(run, row, kept[i], kept[j], float(times[i]), i, kept)
+            pictures, lines, alert = controller_step(run, row, kept[i], kept[j], float(times[i]), i)
         else:
             pictures, lines, alert = _network_step(run, forks, row, kept[i], kept[j], float(times[i]))
         video.write(hud(side_by_side(pictures, scale), lines, alert))

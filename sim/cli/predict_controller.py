@@ -40,9 +40,9 @@ def open_loop_controller(args, est, thr, views, cams, stride, rate_ratio):
     return ctrl, calibration
 
 
-def controller_step(run, row: dict, now: dict, before: dict, t_s: float, i: int, kept: dict):
-    """One job of the controller on the pair ending at frame ``i`` (``kept``: the views of
-    the frames kept back, by index) -> (pictures, HUD lines, alert); fills ``row``."""
+def controller_step(run, row: dict, now: dict, before: dict, t_s: float, i: int):
+    """One job of the controller on the pair ending at frame ``i`` -> (pictures, HUD lines,
+    alert); fills ``row``."""
     from controllers.base import Observation
     from sim.video import geofence_overlay
 
@@ -52,17 +52,9 @@ def controller_step(run, row: dict, now: dict, before: dict, t_s: float, i: int,
     if run.motion:
         j, times = int(run.partner[i]), run.clip.times_s
         turn = float(np.trapezoid(np.asarray(run.motion[1][j : i + 1], float), np.asarray(times[j : i + 1], float)))
-    short, short_turn = None, None  # the fovea one network interval back, for the controller's shorter pair
-    j1 = int(run.partner_short[i]) if run.partner_short is not None and "fovea" in now else -1
-    if j1 >= 0 and j1 in kept:
-        short = kept[j1]["fovea"]
-        if run.motion:
-            t = np.asarray(run.clip.times_s[j1 : i + 1], float)
-            short_turn = float(np.trapezoid(np.asarray(run.motion[1][j1 : i + 1], float), t))
     obs = Observation(
         t_s, speed, now["wide"], before["wide"], run.pair_dt_s, run.calibration,
         now.get("fovea"), before.get("fovea"), ego_yaw_rate_radps=yaw, pair_yaw_rad=turn,
-        fovea_prev_short=short, short_pair_yaw_rad=short_turn,
     )  # fmt: skip
     row |= {"ego_speed_mps": round(speed, 4), "ego_yaw_rate_radps": round(yaw, 5)}
     cmd = run.ctrl.act(obs, None)
