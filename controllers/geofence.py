@@ -31,12 +31,11 @@ estimator's map p_i = p(0 < tau <= tau_i)):
    their motion over the ground, the ego's path ahead, the fovea's finer bearings)
    predicts into the ego's footprint within its TTC: a pedestrian stepping out, a car
    crossing a junction, a van merging from the next lane, an oncoming car the ego turns
-   across. An
-   actor inside the fence is at most that far if it does not close faster than the ego
-   drives, so an adjacent-lane car (static, slower or same-direction) lies outside these
-   columns; an oncoming car in the next lane closes faster and could enter them only
-   when its closing speed exceeds about 2.4x the ego's (3.5 m lanes). A car cutting in
-   enters the columns as it enters the lane.
+   across. An actor inside the fence is at most that far if it does not close faster than
+   the ego drives, so an adjacent-lane car (static, slower or same-direction) lies outside
+   these columns; an oncoming car in the next lane could enter them only when its closing
+   speed exceeds about 2.4x the ego's (3.5 m lanes). A car cutting in enters the columns
+   as it enters the lane.
 4. **Standing on the road, big enough**: an obstacle inside the fence stands on the
    road nearer than the fence's ground boundary, so its counted pixels reach down to
    the lowest counted row; a region whose bottom ends more than ``contact_px`` rows
@@ -50,8 +49,7 @@ estimator's map p_i = p(0 < tau <= tau_i)):
    for it). In the views of ``min_height_views`` (the fovea) it must also span
    ``min_height_m`` at Z_i, fy h / Z_i rows: the road's own fence, running a little past the
    counted rows' boundary, leaves strips one to five rows tall along the lowest counted row.
-   Rows count only when the ground one row below them is
-   outside the fence too (near the horizon one row spans tens of metres).
+   Rows count only when the ground one row below them is outside the fence too.
    A view whose pair turned by more than ``max_rotation_px`` (the fastest yaw rate within
    the pair x its interval x focal length: a junction turn) moves beyond the flow the
    estimator reads. With ``derotate`` its earlier frame is first warped by the ego's
@@ -112,6 +110,7 @@ import time
 
 import numpy as np
 
+from bittc_core.errors import ConfigError
 from controllers.base import BrakeCommand, Calibration, Controller, GeofenceView, Observation
 from controllers.derotate import derotate
 from controllers.evidence import in_path_evidence, judged_bands
@@ -141,6 +140,9 @@ class GeofenceController(Controller):
     def __init__(self, estimator, cfg: GeofenceConfig | None = None, name: str = "geofence") -> None:
         self.estimator = estimator
         self.cfg = cfg or GeofenceConfig()
+        if self.cfg.fovea_short_pair and not getattr(estimator, "sources_per_threshold", False):
+            msg = "would read the shorter pair in a call of its own; only the torch network reads both in one"
+            raise ConfigError(f"GeofenceConfig.fovea_short_pair: estimator {getattr(estimator, 'name', '')!r} {msg}")
         self.name = name
         self.num_alphas = len(self.cfg.thresholds_s)
         self.frame_stride = self.cfg.frame_stride
@@ -214,7 +216,8 @@ class GeofenceController(Controller):
             if rotate:
                 prev = derotate(prev, latest, self._cals[v], obs.pair_rotation_rad)
                 derotated.append(v)
-            short_thr = self._thr_short if v == self._short_view else None
+            # a view that turned too far unrotated gives no evidence: it reads no shorter pair either
+            short_thr = self._thr_short if v == self._short_view and (rotate or not turned) else None
             maps, tag = read_fences(
                 self._estimators[v], obs, v, prev, self._cals[v], c, rotate, self._thr_est[idx], short_thr
             )

@@ -43,7 +43,8 @@ def read_fences(estimator, obs: Observation, view: str, prev, cal: Calibration, 
     short = short_frame(obs, view, cal, cfg.max_rotation_px, rotate) if short_thr is not None else None
     if short is None:
         return estimator.geofence(prev, latest, thr_est), ""
-    maps = estimator.geofence_pairs([short[0]] + [prev] * len(thr_est), latest, [short_thr, *thr_est])
-    out = maps[1:].copy()
-    out[0] = np.maximum(out[0], maps[0])
+    # the longer pair first: the frames are touched in the order the loop's cache model counts
+    maps = estimator.geofence_pairs([prev] * len(thr_est) + [short[0]], latest, [*thr_est, short_thr])
+    out = maps[:-1].copy()
+    out[0] = np.maximum(out[0], maps[-1])
     return out, view + ("-derotated" if short[1] else "")

@@ -83,7 +83,7 @@ class FrameRecord:
     ego_accel_mps2: float
     truth: StepTruth  # ground truth at capture (never shown to a deployable policy)
     active: BrakeCommand  # the command in effect at capture
-    status: str = "pending"  # processed | skipped | unpaired | unused (see the module docstring)
+    status: str = "pending"  # processed | skipped | unpaired | unused (see sim.loop's docstring)
     latency_s: float | None = None  # [s] estimator latency of its job
     wait_s: float | None = None  # [s] from capture to the start of its job
     decided: BrakeCommand | None = None  # its job's command

@@ -119,7 +119,8 @@ class ClosedLoop:
         self.first_warning: tuple[float, float | None] | None = None  # (t [s], critical TTC [s])
         self.first_brake: tuple[float, float | None] | None = None
         self.brake_integral = 0.0  # [m/s] integral of the commanded deceleration over time
-        self._cache = FeatureCacheModel(self.cached_frames)
+        # each view's feature cache as the loop counts it (alike while the views read the same frames)
+        self._caches = {v: FeatureCacheModel(self.cached_frames) for v in self._pixel_share}
         self._first_frame = self.stride if self.pairs else 0
         self._capture()
         return self._schedule(-1, 0.0)
@@ -186,20 +187,24 @@ class ClosedLoop:
         return self._schedule(job.frame, job.start_s + L)
 
     def _work(self, frame: int, cmd: BrakeCommand) -> JobWork:
-        """What the job on ``frame`` computes: its pair's frames not in the feature cache, per
-        view, and one more frame per view whose earlier frame the controller warped
-        (telemetry ``derotated``: no cache holds the warped frame)."""
+        """What the job on ``frame`` computes: the frames not in each view's feature cache (its
+        pair's, then the shorter pair's of telemetry ``short_pair``), and one more frame per
+        warped earlier frame (``derotated``, a derotated shorter pair: no cache holds one)."""
         pair = (frame - self.stride, frame) if self.pairs else (frame,)
-        work = JobWork.of_views(self.view_thresholds, self._pixel_share, self.estimator, self._cache.extractions(pair))
+        tags = filter(None, str(cmd.telemetry.get("short_pair", "")).split("+"))
+        shorts = {t.removesuffix("-derotated"): t.endswith("-derotated") for t in tags}
         warped = [v for v in str(cmd.telemetry.get("derotated", "")).split("+") if v in self._pixel_share]
-        # a view that read the shorter pair too: its earlier frame where not cached, or warped
-        for tag in filter(None, str(cmd.telemetry.get("short_pair", "")).split("+")):
-            v, rotated = tag.removesuffix("-derotated"), tag.endswith("-derotated")
-            if v in self._pixel_share and (rotated or self._cache.extractions((frame - 1,))):
-                warped.append(v)
-        if not warped:
-            return work
-        return replace(work, extractions=work.extractions + sum(self._pixel_share[v] for v in warped))
+        warped += [v for v, rotated in shorts.items() if rotated and v in self._pixel_share]
+        counts = {}
+        for v, cache in self._caches.items():  # the frames in the order the estimator reads them
+            read = pair + ((frame - 1, frame) if v in shorts and not shorts[v] else ())
+            counts[v] = cache.extractions(read)
+        n = counts["wide"]
+        work = JobWork.of_views(self.view_thresholds, self._pixel_share, self.estimator, n)
+        extra = sum((counts[v] - n) * self._pixel_share[v] for v in self.view_thresholds) + sum(
+            self._pixel_share[v] for v in warped
+        )
+        return replace(work, extractions=work.extractions + extra) if extra else work
 
     def drive(self, controller: Controller) -> None:
         """Run to the end with ``controller`` deciding every job (reset with this car's calibration)."""

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 import torch
 
+from bittc_core.errors import ConfigError
 from bittc_core.estimator import BittcEstimator, EstimatorInputError, FlowEstimator
 from bittc_core.model import BinaryTTCNet, get_config
 from controllers.base import Observation
@@ -40,6 +41,17 @@ def test_the_network_reads_each_threshold_on_its_own_pair_as_separate_calls_woul
     assert np.abs(joint[0] - est.geofence(a, c, [1.0])[0]).max() > 1e-5  # the pair matters (an untrained net)
 
 
+def test_each_frame_goes_through_the_extractor_once_when_every_frame_has_a_job():
+    """The longer pair's frames first, then the shorter pair's, as the controller reads them
+    and the loop's cache model counts them: the cache still holds every earlier frame."""
+    torch.manual_seed(0)
+    est = BittcEstimator(BinaryTTCNet(get_config("tiny")), device=torch.device("cpu"))
+    f = frames(13)
+    for k in range(3, 13):
+        est.geofence_pairs([f[k - 3], f[k - 3], f[k - 1]], f[k], [0.5, 1.0, 1.5])
+    assert est.feature_computations == 13
+
+
 def test_other_estimators_read_one_pair_a_call_and_a_mismatch_is_refused():
     a, b, c = frames(3)
     flow = FlowEstimator()
@@ -48,12 +60,17 @@ def test_other_estimators_read_one_pair_a_call_and_a_mismatch_is_refused():
     assert np.array_equal(joint[1], flow.geofence(a, c, [0.6])[0])
     with pytest.raises(EstimatorInputError, match="2 earlier frames for 1 thresholds"):
         flow.geofence_pairs([b, a], c, [1.0])
+    # a controller on such an estimator would pay a whole call for the shorter pair: refused
+    with pytest.raises(ConfigError, match="fovea_short_pair: estimator 'flow'"):
+        GeofenceController(flow, GeofenceConfig(fovea_short_pair=True))
 
 
 class PairMapEstimator(ViewMapEstimator):
     """Hard fences of the true TTC maps: the wide view's ``tau``, the fovea's ``tau_fovea``
     on the pair 0.3 s apart (its earlier frame marked 3) and ``tau_short`` on the pair one
     frame apart (marked 1); thresholds in the 0.1 s time base, so times the pair's frames."""
+
+    sources_per_threshold = True  # reads every pair of a job in one call, as the network does
 
     def geofence(self, prev, latest, thresholds_s):
         frames_apart = int(prev[0, 0, 1]) or 3
@@ -154,6 +171,9 @@ def test_a_profile_charges_the_shorter_pair_as_one_threshold_and_its_frame_once(
     # the fovea (half as wide: its thresholds and extractions count half) reads its 2 s fence on two pairs
     steady = prof.latency_ms(JobWork("bittc", 2, 2 + 0.5 * 2, 1 + 0.5))  # one new frame per view
     first = prof.latency_ms(JobWork("bittc", 2, 2 + 0.5 * 2, 2 + 1))  # both frames of the first pairs
-    # the first job also extracts the fovea's frame one interval back, which no job had used
+    # the first job (frame 3) also extracts the fovea's frame 2, which no job had used; so the
+    # job on frame 5, whose pair is (2, 5), finds frame 2 in the fovea's cache, not the wide view's
     very_first = prof.latency_ms(JobWork("bittc", 2, 2 + 0.5 * 2, 2 + 1 + 0.5))
-    assert lat == {round(steady, 2), round(first, 2), round(very_first, 2)} and s["frames_skipped"] == 0
+    third = prof.latency_ms(JobWork("bittc", 2, 2 + 0.5 * 2, 2 + 0.5))
+    expected = {round(x, 2) for x in (steady, first, very_first, third)}
+    assert lat == expected and s["frames_skipped"] == 0

@@ -38,7 +38,8 @@ from bittc_core.ttc import tau_to_eta
 #: frames whose features the cache holds: the least recently used is evicted, so a stream of
 #: pairs (k - n, k) for every k (four frames touched between two uses of frame k - n at n = 3)
 #: reuses every frame's features for n <= (CACHED_FRAMES + 1) / 2 = 3, the controller's
-#: default stride; a larger stride extracts the older frame again (and is charged for it)
+#: default stride; a larger stride extracts the older frame again (and is charged for it).
+#: With the fovea's shorter pair read after it, (k - 1, k), still one new frame a job
 CACHED_FRAMES = 5
 TTA_MODES = ("none", "flip")
 
@@ -162,19 +163,24 @@ class StreamingNetEstimator(Estimator):
     def geofence_pairs(self, images_prev, image_latest, thresholds_s) -> np.ndarray:
         if not self.sources_per_threshold or len(images_prev) != len(thresholds_s):
             return super().geofence_pairs(images_prev, image_latest, thresholds_s)
-        pairs = [as_image_pair(p, image_latest) for p in images_prev]
+        converted: dict[int, tuple] = {}  # each distinct earlier frame (the same object) converted once
+        for p in images_prev:
+            if id(p) not in converted:
+                converted[id(p)] = as_image_pair(p, image_latest)
         thr = as_thresholds(thresholds_s, self.tau_range_s, sorted_=False)
-        return self._geofence_pairs([p for p, _ in pairs], pairs[0][1], tau_to_eta(thr, self.dt_s))
+        prevs = [converted[id(p)][0] for p in images_prev]
+        return self._geofence_pairs(prevs, converted[id(images_prev[0])][1], tau_to_eta(thr, self.dt_s))
 
     @torch.inference_mode()
     def _geofence_pairs(self, prevs: list[torch.Tensor], latest: torch.Tensor, eta: np.ndarray) -> np.ndarray:
         """Each threshold on its own earlier frame, one classify call: the earlier frames'
         features (from the cache where the pixels match) stacked per threshold."""
-        feats = []
+        distinct: dict[int, Any] = {}  # each earlier frame prepared once, in the order given
         ctx = None
         for prev in prevs:
-            ctx, feat_prev = self._prepare(prev, latest)  # the reference is made once
-            feats.append(feat_prev)
+            if id(prev) not in distinct:
+                ctx, distinct[id(prev)] = self._prepare(prev, latest)  # the reference is made once
+        feats = [distinct[id(prev)] for prev in prevs]
         views = self._reference[0].shape[0]
         feat_src = torch.stack(feats, dim=1).flatten(0, 1)  # (V*K, C, h, w), batch-major
         eta_t = torch.as_tensor(eta, dtype=torch.float32, device=self.device)[None].expand(views, -1)
