@@ -155,10 +155,14 @@ class StreamingNetEstimator(Estimator):
     @torch.inference_mode()
     def _geofence(self, prev: torch.Tensor, latest: torch.Tensor, eta: np.ndarray) -> np.ndarray:
         ctx, feat_prev = self._prepare(prev, latest)
+        return self._fence_maps(ctx, feat_prev, eta)
+
+    def _fence_maps(self, ctx: Any, feat_src: Any, eta: np.ndarray) -> np.ndarray:
+        """The classified thresholds ``eta`` on the prepared pair(s) -> (K, H, W) probabilities
+        in the plain view's grid (the views of the latest frame merged)."""
         views = self._reference[0].shape[0]
         eta_t = torch.as_tensor(eta, dtype=torch.float32, device=self.device)[None].expand(views, -1)
-        logits = self._classify(ctx, feat_prev, eta_t)
-        return torch.sigmoid(self._merge(logits)).float().cpu().numpy()
+        return torch.sigmoid(self._merge(self._classify(ctx, feat_src, eta_t))).float().cpu().numpy()
 
     def geofence_pairs(self, images_prev, image_latest, thresholds_s) -> np.ndarray:
         if not self.sources_per_threshold or len(images_prev) != len(thresholds_s):
@@ -180,12 +184,8 @@ class StreamingNetEstimator(Estimator):
         for prev in prevs:
             if id(prev) not in distinct:
                 ctx, distinct[id(prev)] = self._prepare(prev, latest)  # the reference is made once
-        feats = [distinct[id(prev)] for prev in prevs]
-        views = self._reference[0].shape[0]
-        feat_src = torch.stack(feats, dim=1).flatten(0, 1)  # (V*K, C, h, w), batch-major
-        eta_t = torch.as_tensor(eta, dtype=torch.float32, device=self.device)[None].expand(views, -1)
-        logits = self._classify(ctx, feat_src, eta_t)
-        return torch.sigmoid(self._merge(logits)).float().cpu().numpy()
+        feat_src = torch.stack([distinct[id(prev)] for prev in prevs], dim=1).flatten(0, 1)  # (V*K, C, h, w)
+        return self._fence_maps(ctx, feat_src, eta)
 
     @torch.inference_mode()
     def _motion_in_depth(self, prev: torch.Tensor, latest: torch.Tensor) -> np.ndarray:
