@@ -146,6 +146,14 @@ class Observation:
         yaw rate at the capture times the pair's interval)."""
         return float(self.pair_yaw_rad) if self.pair_yaw_rad is not None else float(self.ego_yaw_rate_radps) * self.dt_s
 
+    @property
+    def short_pair_rotation_rad(self) -> float:
+        """[rad] + left: the ego's heading change over the shorter pair, one frame interval
+        (``short_pair_yaw_rad``, else the yaw rate times the calibration's frame interval)."""
+        if self.short_pair_yaw_rad is not None:
+            return float(self.short_pair_yaw_rad)
+        return float(self.ego_yaw_rate_radps) * self.calibration.frame_dt_s
+
 
 @dataclass(frozen=True)
 class GeofenceView:

@@ -7,7 +7,7 @@ frame apart it moves a third as far. So the fovea's smallest fence is read on bo
 in one call of the estimator (``Estimator.geofence_pairs``: the network classifies each
 threshold on its own earlier frame, so the job costs one threshold more), and a pixel is
 inside where either reading puts it. The shorter pair is derotated by its own turn
-(``Observation.short_pair_yaw_rad``) where the longer one would be; where it turned too far
+(``Observation.short_pair_rotation_rad``) where the longer one would be; where it turned too far
 to use, the fence is read on the longer pair alone.
 """
 
@@ -25,12 +25,12 @@ def short_frame(obs: Observation, view: str, cal: Calibration, max_rotation_px: 
     prev = obs.fovea_prev_short if view == "fovea" else None
     if prev is None:
         return None
-    turn = obs.short_pair_yaw_rad if obs.short_pair_yaw_rad is not None else obs.ego_yaw_rate_radps * cal.frame_dt_s
+    turn = obs.short_pair_rotation_rad
     if abs(turn) * cal.fx_px <= max_rotation_px:
         return prev, False
     if not rotate:
         return None
-    return derotate(prev, obs.fovea_latest, cal, float(turn)), True
+    return derotate(prev, obs.fovea_latest, cal, turn), True
 
 
 def read_fences(estimator, obs: Observation, view: str, prev, cal: Calibration, cfg, rotate: bool, thr_est, short_thr):
