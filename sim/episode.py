@@ -24,7 +24,7 @@ from sim.episode_placement import overlap_offset_m
 from sim.episode_records import Collision, Frame, StepTruth
 from sim.episode_sensor import through_sensor
 from sim.ground_truth import GroundTruth
-from sim.stepping import capture_pose, pair_ground_truth, step_traffic, substeps
+from sim.stepping import capture_pose, captures_ground_truth, step_traffic, substeps
 from sim.textures import TextureStyle
 from sim.traffic import ActuatorConfig, EgoVehicle, ScriptedVehicle, TrafficVehicle, build_road
 from sim.vehicles import EGO_SIZE_M, footprints_overlap, sample_spec
@@ -212,19 +212,7 @@ class ScenarioSim:
     def ground_truth(self, prev: Frame, latest: Frame, view: str = "wide") -> GroundTruth:
         """Exact per-pixel ground truth of ``latest`` against ``prev`` in view 'wide' or 'fovea'."""
         _, depth_m, instance = latest.view(view)
-        return pair_ground_truth(
-            self.camera.view(view),
-            depth_m,
-            instance,
-            latest.cam_T_world,
-            prev.cam_T_world,
-            latest.poses,
-            prev.poses,
-            latest.t_s - prev.t_s,
-            latest.parts(view),
-            latest.part_poses,
-            prev.part_poses,
-        )
+        return captures_ground_truth(self.camera.view(view), depth_m, instance, latest.parts(view), latest, prev)
 
     # ------------------------------------------------------------------ stepping
     def reset(self) -> StepTruth:

@@ -149,24 +149,11 @@ class KittiExporter:
         the previous capture (for the first, since the state one frame interval before)."""
         from sim.episode_sensor import frame_before
         from sim.sensor import apply_effects
-        from sim.stepping import pair_ground_truth
+        from sim.stepping import captures_ground_truth
 
         prev = self.prev if self.prev is not None else frame_before(self.sim, frame)
-        dt = frame.t_s - prev.t_s
-        gt = pair_ground_truth(
-            self.pin,
-            r.depth_m,
-            r.instance,
-            frame.cam_T_world,
-            prev.cam_T_world,
-            frame.poses,
-            prev.poses,
-            dt,
-            r.part,
-            frame.part_poses,
-            prev.part_poses,
-        )
-        return apply_effects(r.rgb, self.sim.sensor, gt.flow_px, dt, self.rng, self.codec)
+        gt = captures_ground_truth(self.pin, r.depth_m, r.instance, r.part, frame, prev)
+        return apply_effects(r.rgb, self.sim.sensor, gt.flow_px, frame.t_s - prev.t_s, self.rng, self.codec)
 
     def finish(self) -> Path:
         """Timestamps, calibration and the truth file; the folder renamed into place."""

@@ -65,3 +65,23 @@ def pair_ground_truth(
     return compute_ground_truth(
         depth_m, instance, view.K(), cam_T_world, prev_cam_T_world, motions, dt_s, view.far_m, parts=parts
     )
+
+
+def captures_ground_truth(view: Pinhole, depth_m, instance, parts, latest, prev) -> GroundTruth:
+    """``pair_ground_truth`` of two captures (``sim.episode_records.Frame``: time, pose,
+    actors' and parts' poses), ``latest`` seen through ``view`` with its render's
+    ``depth_m``, ``instance`` and ``parts`` (any pinhole from the same pose: a run's views,
+    the KITTI export's native camera)."""
+    return pair_ground_truth(
+        view,
+        depth_m,
+        instance,
+        latest.cam_T_world,
+        prev.cam_T_world,
+        latest.poses,
+        prev.poses,
+        latest.t_s - prev.t_s,
+        parts,
+        latest.part_poses,
+        prev.part_poses,
+    )
