@@ -32,6 +32,7 @@ os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
 import torch  # noqa: E402
 
 import bittc_core.model.warp as warp  # noqa: E402
+from bittc_core.atomic import write_text_atomic  # noqa: E402
 from sim.cli import main as bittc  # noqa: E402
 
 _CENTRE_WARP = warp.scale_warp
@@ -97,10 +98,7 @@ def main(argv: list[str] | None = None) -> int:
         return rc
     result = json.loads(open(out).read())
     result["warp"] = args.warp
-    tmp = out + ".tmp"
-    with open(tmp, "w") as f:
-        json.dump(result, f, indent=2)
-    os.replace(tmp, out)
+    write_text_atomic(out, json.dumps(result, indent=2))
     return 0
 
 
