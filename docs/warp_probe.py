@@ -29,26 +29,12 @@ import sys
 
 os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
 
-import torch  # noqa: E402
-
 import bittc_core.model.warp as warp  # noqa: E402
 from bittc_core.atomic import write_text_atomic  # noqa: E402
 from sim.cli import main as bittc  # noqa: E402
 
 _CENTRE_WARP = warp.scale_warp
-
-
-def column_warp(src: torch.Tensor, eta: torch.Tensor, grid: warp.PaddedGrid, unpadded: bool = False) -> torch.Tensor:
-    """``warp.scale_warp`` with the horizontal coordinate left alone: rows scaled about the
-    centre row by each eta, every column sampled where it stands."""
-    b, k = eta.shape
-    base = grid.base_grid(src.device, src.dtype)  # (hp, wp, 2): normalised (x, y), centred
-    if unpadded:
-        base = base[grid.top : grid.top + grid.h, grid.left : grid.left + grid.w]
-    y = eta.reshape(b * k, 1, 1, 1).to(src.dtype) * base[..., 1:]
-    sample = torch.cat([base[..., :1].expand_as(y), y], dim=-1)
-    src_k = src if src.shape[0] == b * k else warp._repeat_per_hypothesis(src, k)
-    return torch.nn.functional.grid_sample(src_k, sample, mode="bilinear", padding_mode="zeros", align_corners=True)
+column_warp = warp.column_warp
 
 
 def _option(args: list[str], flag: str) -> str | None:

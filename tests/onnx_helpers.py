@@ -14,15 +14,16 @@ SIZE = (24, 48)  # (H, W) of the tiny network's test frames
 HALF = (24, 24)  # (H, W) of a view half as wide (as the fovea beside the wide view)
 
 
-def tiny_checkpoint(path, seed: int = 0, shift_px: int = 0):
+def tiny_checkpoint(path, seed: int = 0, shift_px: int = 0, column: bool = False):
     torch.manual_seed(seed)
-    # the correlation volume too (and its shifted correlations with ``shift_px``)
-    cfg = dataclasses.replace(get_config("tiny"), corr_groups=4, corr_shift_px=shift_px)
+    # the correlation volume too (its shifted correlations with ``shift_px``, its column
+    # correlations with ``column``)
+    cfg = dataclasses.replace(get_config("tiny"), corr_groups=4, corr_shift_px=shift_px, corr_column=column)
     net = BinaryTTCNet(cfg).eval()
-    if shift_px:  # the shifted correlations' convs start at zero: make them count
-        with torch.no_grad():
-            net.segnet.shift_first.weight.normal_(0.0, 0.3)
-            net.segnet.shift_last.weight.normal_(0.0, 0.3)
+    for part in ("shift",) * bool(shift_px) + ("column",) * column:
+        with torch.no_grad():  # the added parts' convs start at zero: make them count
+            getattr(net.segnet, f"{part}_first").weight.normal_(0.0, 0.3)
+            getattr(net.segnet, f"{part}_last").weight.normal_(0.0, 0.3)
     save_checkpoint(path, make_payload(net, "tiny", {"frame_dt_s": cfg.frame_dt_s}))
     return path
 

@@ -9,7 +9,7 @@ import torch
 from bittc_core.model.config import ModelConfig
 from bittc_core.model.correlation import CORR_OFFSETS, group_correlation, scale_correlation, shifted_correlation
 from bittc_core.model.segnet import SegNet2D
-from bittc_core.model.warp import PaddedGrid, scale_warp
+from bittc_core.model.warp import PaddedGrid, column_warp, scale_warp
 
 
 def test_group_correlation_is_the_mean_product_per_group():
@@ -171,6 +171,43 @@ def test_scale_correlation_appends_the_shifted_channels():
     torch.testing.assert_close(both[:, :12], plain)
     middle = grid.crop(warped)
     torch.testing.assert_close(both[:, 16:20], shifted_correlation(ref, middle, 4, 1))
+
+
+def test_scale_correlation_appends_the_column_channels_last():
+    """With ``column`` the volume ends in the group correlations of the three column warps,
+    after the centre warps' (and the shifted ones'), each at its own eta."""
+    g = torch.Generator().manual_seed(8)
+    grid = PaddedGrid.for_features(8, 12, 1.5, 4)
+    ref, src = torch.randn(1, 8, 8, 12, generator=g), torch.randn(1, 8, 8, 12, generator=g)
+    eta, step = torch.tensor([[0.8, 1.0]]), 0.05
+    warped = scale_warp(src, eta, grid)
+    shifted = scale_correlation(ref, src, eta, warped, grid, 4, step, max_shift=1)
+    every = scale_correlation(ref, src, eta, warped, grid, 4, step, max_shift=1, column=True)
+    assert every.shape == (2, 36, 8, 12)
+    torch.testing.assert_close(every[:, :24], shifted)
+    for j, offset in enumerate(CORR_OFFSETS):
+        columns = column_warp(src, eta * math.exp(offset * step), grid, unpadded=True)
+        torch.testing.assert_close(every[:, 24 + 4 * j : 28 + 4 * j], group_correlation(ref, columns, 4))
+    # about the centre, the column warp at eta 1 is the identity, as the centre warp is
+    torch.testing.assert_close(every[1:, 28:32], every[1:, 4:8])
+
+
+def test_column_warp_keeps_columns_and_scales_rows_as_the_centre_warp():
+    """Where the source varies only down the columns, the two warps agree; where it varies
+    only along the rows, the column warp leaves it be and the centre warp scales it."""
+    grid = PaddedGrid.for_features(9, 15, 1.5, 4)
+    eta = torch.tensor([[0.7, 0.9]])
+    rows = torch.linspace(0.0, 1.0, 9)[:, None].expand(9, 15)[None, None]
+    cols = torch.linspace(0.0, 1.0, 15)[None, :].expand(9, 15)[None, None]
+    torch.testing.assert_close(column_warp(rows, eta, grid, unpadded=True), scale_warp(rows, eta, grid, unpadded=True))
+    kept = column_warp(cols, eta, grid, unpadded=True)
+    torch.testing.assert_close(kept, cols.expand(2, 1, 9, 15))
+    assert not torch.allclose(scale_warp(cols, eta, grid, unpadded=True), kept)
+
+
+def test_column_correlations_need_the_volume():
+    with pytest.raises(ValueError, match="corr_column=True: needs the correlation volume"):
+        ModelConfig(corr_column=True)
 
 
 def test_shifted_correlation_needs_whole_groups():

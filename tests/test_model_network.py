@@ -115,12 +115,14 @@ def test_registered_config_sizes():
         medium = count_parameters(BinaryTTCNet(CONFIGS["cpu-medium"]))
         corr = count_parameters(BinaryTTCNet(CONFIGS["cpu-small-corr"]))
         shift = count_parameters(BinaryTTCNet(CONFIGS["cpu-small-corr-shift"]))
+        column = count_parameters(BinaryTTCNet(CONFIGS["cpu-small-corr-column"]))
         tiny = count_parameters(BinaryTTCNet(CONFIGS["tiny"]))
     assert 88e6 < paper < 94e6  # "about 91 M"
     assert tiny < small < gc < 2e6  # cpu-small-gc = cpu-small + the global-context block
     assert small < medium < 2e6  # cpu-medium = cpu-small + growth blocks
     assert corr - small == 3 * 8 * 16 * (9 + 1)  # cpu-small-corr: 3 warps x 8 groups into 16-ch 3x3 and 1x1 convs
     assert shift - corr == 3 * 8 * 16 * (9 + 1)  # the shifted correlations: as many again, their own convs
+    assert column - corr == 3 * 8 * 16 * (9 + 1)  # the column correlations: the same
     assert CONFIGS["paper"].norm == "none" and CONFIGS["cpu-small"].norm != "none"
 
 
@@ -132,6 +134,8 @@ def test_registered_config_sizes():
         ("refine_extra_blocks", {}),
         ("corr_groups", {}),
         ("corr_shift_px", {"corr_groups": 2}),
+        ("corr_column", {"corr_groups": 2}),
+        ("corr_column", {"corr_groups": 2, "corr_shift_px": 1}),
     ],
 )
 def test_growth_blocks_start_as_the_identity(field, base):
@@ -141,12 +145,12 @@ def test_growth_blocks_start_as_the_identity(field, base):
     then runs on a wider crop, so its batch norm takes its statistics over more pixels."""
     torch.manual_seed(0)
     small = BinaryTTCNet(dataclasses.replace(CONFIGS["tiny"], **base))
-    grown = BinaryTTCNet(dataclasses.replace(CONFIGS["tiny"], **base, **{field: 2}))
+    grown = BinaryTTCNet(dataclasses.replace(CONFIGS["tiny"], **base, **{field: True if field == "corr_column" else 2}))
     if base:  # a trained volume: live, so the grown network must keep what it adds
         with torch.no_grad():
             small.segnet.corr_first.weight.normal_(0.0, 0.3)
     missing, unexpected = grown.load_state_dict(small.state_dict(), strict=False)
-    added = (".extra", "dec_extra", ".corr_", ".shift_")
+    added = (".extra", "dec_extra", ".corr_", ".shift_", ".column_")
     assert missing and not unexpected and all(any(a in k for a in added) for k in missing)
     prev, latest = torch.rand(2, 3, 48, 96), torch.rand(2, 3, 48, 96)
     eta = torch.tensor([[0.8, 1.0], [0.9, 1.1]])

@@ -31,7 +31,6 @@ from torch import nn
 
 from bittc_core.model import BinaryTTCNet
 from bittc_core.model.auc import auc_eta, uniform_levels
-from bittc_core.model.correlation import scale_correlation
 from bittc_core.model.network import FEATURE_STRIDE
 from bittc_core.model.segnet import HEAD_TTC, ReferenceTerms
 from bittc_core.model.warp import PaddedGrid, scale_warp
@@ -69,15 +68,11 @@ class _Graph(nn.Module):
 
     def _logits(self, refs: tuple[torch.Tensor, ...], feat_prev: torch.Tensor, eta: torch.Tensor) -> torch.Tensor:
         """eta (V, K) -> refined logits (V, K, H, W), all hypotheses in one batch."""
-        net, cfg, grid = self.net, self.net.config, self.grid
+        net, grid = self.net, self.grid
         terms, guide = self._terms(refs)
         v, k = eta.shape
         warped = scale_warp(feat_prev, eta, grid)
-        corr = None
-        if cfg.corr_groups:
-            corr = scale_correlation(
-                terms.feat, feat_prev, eta, warped, grid, cfg.corr_groups, cfg.corr_log_step, cfg.corr_shift_px
-            )
+        corr = net.correlation(terms.feat, feat_prev, eta, warped, grid)
         coarse = net.segnet(terms, warped, grid, corr)[:, HEAD_TTC : HEAD_TTC + 1]
         coarse = F.interpolate(coarse, size=self.size, mode="bilinear", align_corners=False)
         return net.refine(guide, coarse).view(v, k, *self.size)

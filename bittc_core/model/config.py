@@ -26,7 +26,7 @@ NORMS = ("none", "batch", "group")
 #: Unchanged in eval mode, exactly; in train mode the finest decoder level's batch norm
 #: takes its statistics over a crop widened by 2 px a side per decoder growth block.
 GROWTH_COUNTS = ("feat_extra_blocks", "dec_extra_blocks", "refine_extra_blocks")
-GROWTH_FLAGS = ("global_context",)
+GROWTH_FLAGS = ("global_context", "corr_column")
 #: Growth switches: counts that may only be switched on (0 -> n) by growth: the
 #: correlation volume's convs start at zero, but its width depends on the count, so
 #: n -> m != n does not carry over; the shifted correlations' width does not depend on
@@ -58,6 +58,10 @@ class ModelConfig:
     # the volume's shifted correlations (``model.correlation.shifted_correlation``): the
     # largest over sideways shifts up to this many feature px; 0 = off; convs start at zero
     corr_shift_px: int = 0
+    # the volume's column correlations (``model.correlation``): the three warps again with
+    # each column left in place (rows scaled only), where a road user on a collision course
+    # aligns; convs start at zero
+    corr_column: bool = False
     # SegRefineNet (guided by the reference image)
     guide_channels: int = 16
     refine_channels: int = 8
@@ -104,6 +108,8 @@ class ModelConfig:
             raise ValueError(
                 f"ModelConfig.corr_shift_px={self.corr_shift_px}: needs the correlation volume (corr_groups > 0)"
             )
+        if self.corr_column and not self.corr_groups:
+            raise ValueError("ModelConfig.corr_column=True: needs the correlation volume (corr_groups > 0)")
         if not 0.0 < self.corr_log_step < math.inf:
             raise ValueError(f"ModelConfig.corr_log_step={self.corr_log_step}: must be > 0")
         if self.pad_factor < 1.0:
@@ -146,6 +152,11 @@ class ModelConfig:
 #: (up to 2 feature px, 6 px of the input, either way along the rows), fed to SegNet's
 #: first and last convs by two more convs that start at zero, trained from a
 #: ``cpu-small-corr`` checkpoint: a road user crossing between the pair's frames.
+#: ``cpu-small-corr-column``: ``cpu-small-corr`` plus the volume's column correlations
+#: (the three warps with each column in place, rows scaled about the centre row), fed to
+#: SegNet's first and last convs by two more convs that start at zero, trained from a
+#: ``cpu-small-corr`` checkpoint: a road user on a collision course keeps its bearing, so
+#: it grows about its own column, where the scale warp about the centre misses it.
 #: ``tiny``: unit tests only.
 _CPU_SMALL = ModelConfig(
     stem_channels=16,
@@ -172,6 +183,7 @@ CONFIGS: dict[str, ModelConfig] = {
     "cpu-small-corr": dataclasses.replace(_CPU_SMALL, corr_groups=8),
     "cpu-small-corr-gc": dataclasses.replace(_CPU_SMALL, corr_groups=8, global_context=True),
     "cpu-small-corr-shift": dataclasses.replace(_CPU_SMALL, corr_groups=8, corr_shift_px=2),
+    "cpu-small-corr-column": dataclasses.replace(_CPU_SMALL, corr_groups=8, corr_column=True),
     "tiny": ModelConfig(
         stem_channels=8,
         feat_channels=8,

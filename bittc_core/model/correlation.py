@@ -20,6 +20,12 @@ d feature px to one side of where the reference has it. With ``max_shift`` s > 0
 volume gains 3G channels (``shifted_correlation``): for each warp, the largest of its
 group correlations with the warped source moved by d = -s ... s feature px along the
 rows, so a target that moved sideways by up to s feature px compares with itself.
+
+With ``column`` the volume gains 3G channels more, last: the group correlations of the
+three warps made by ``column_warp`` (rows scaled about the centre row, each column in
+place). A road user on a collision course keeps its bearing, so between the frames it
+grows about its own column: there the column warp aligns it, where the scale warp about
+the image centre misses it by (x - c)(1 - eta) feature px (x its column, c the centre's).
 """
 
 from __future__ import annotations
@@ -29,7 +35,7 @@ import math
 import torch
 import torch.nn.functional as F
 
-from bittc_core.model.warp import PaddedGrid, scale_warp
+from bittc_core.model.warp import PaddedGrid, column_warp, scale_warp
 
 #: offsets of the three correlation warps, in units of ``log_step`` of log eta
 CORR_OFFSETS = (-1.0, 0.0, 1.0)
@@ -96,10 +102,11 @@ def scale_correlation(
     groups: int,
     log_step: float,
     max_shift: int = 0,
+    column: bool = False,
 ) -> torch.Tensor:
     """Correlation volume of the three warps about each eta (B, K) -> (B*K, 3G, h, w), on
-    the unpadded map; with ``max_shift`` > 0, (B*K, 6G, h, w): the three warps' shifted
-    correlations follow.
+    the unpadded map; with ``max_shift`` > 0 the three warps' shifted correlations follow
+    (3G channels), and with ``column`` the three column warps' correlations last (3G).
 
     ``ref`` (B, C, h, w) are the unpadded reference features, ``warped`` is
     ``scale_warp(src, eta, grid)``, already computed for SegNet's input. The reference is
@@ -113,4 +120,9 @@ def scale_correlation(
     parts = [group_correlation(ref, w, groups) for w in warps]
     if max_shift:
         parts += [shifted_correlation(ref, w, groups, max_shift) for w in warps]
+    if column:
+        parts += [
+            group_correlation(ref, column_warp(src, eta * math.exp(o * log_step), grid, unpadded=True), groups)
+            for o in CORR_OFFSETS
+        ]
     return torch.cat(parts, dim=1)

@@ -82,6 +82,7 @@ class BinaryTTCNet(nn.Module):
             extra_blocks=c.dec_extra_blocks,
             corr_channels=len(CORR_OFFSETS) * c.corr_groups,
             shift_channels=len(CORR_OFFSETS) * c.corr_groups if c.corr_shift_px else 0,
+            column_channels=len(CORR_OFFSETS) * c.corr_groups if c.corr_column else 0,
         )
         self.refine = SegRefineNet(
             guide_channels=c.guide_channels,
@@ -118,6 +119,18 @@ class BinaryTTCNet(nn.Module):
         logits = self.segnet(ctx.terms, warped, ctx.grid, corr)[:, heads]
         return F.interpolate(logits, size=ctx.image.shape[-2:], mode="bilinear", align_corners=False)
 
+    def correlation(
+        self, feat_ref: torch.Tensor, src: torch.Tensor, eta: torch.Tensor, warped: torch.Tensor, grid: PaddedGrid
+    ) -> torch.Tensor | None:
+        """The config's correlation volume (``model.correlation.scale_correlation``) for the
+        hypotheses eta (B, K), or None without one."""
+        c = self.config
+        if not c.corr_groups:
+            return None
+        return scale_correlation(
+            feat_ref, src, eta, warped, grid, c.corr_groups, c.corr_log_step, c.corr_shift_px, c.corr_column
+        )
+
     def classify_eta(self, ctx: ReferenceContext, feat_src: torch.Tensor, eta: torch.Tensor) -> torch.Tensor:
         """eta thresholds (B, K) -> refined logits of p(eta <= eta_i), (B, K, H, W).
         ``feat_src``: the earlier frame's features (B, C, h, w), or one earlier frame per
@@ -138,18 +151,7 @@ class BinaryTTCNet(nn.Module):
             if per_threshold:
                 src = feat_src.unflatten(0, (b, k))[:, start : start + chunk].flatten(0, 1)
             warped = scale_warp(src, part, ctx.grid)
-            corr = None
-            if self.config.corr_groups:
-                corr = scale_correlation(
-                    ctx.terms.feat,
-                    src,
-                    part,
-                    warped,
-                    ctx.grid,
-                    self.config.corr_groups,
-                    self.config.corr_log_step,
-                    self.config.corr_shift_px,
-                )
+            corr = self.correlation(ctx.terms.feat, src, part, warped, ctx.grid)
             coarse = self._coarse(ctx, warped, slice(HEAD_TTC, HEAD_TTC + 1), corr)
             coarse = coarse.view(b, part.shape[1], *coarse.shape[-2:])
             # the full-resolution refiner runs one threshold at a time: on a CPU a batch of

@@ -129,6 +129,7 @@ class SegNet2D(nn.Module):
         extra_blocks: int = 0,
         corr_channels: int = 0,
         shift_channels: int = 0,
+        column_channels: int = 0,
     ) -> None:
         super().__init__()
         e, d = enc_channels, dec_channels
@@ -168,12 +169,21 @@ class SegNet2D(nn.Module):
         self.head = conv(d[-1], NUM_HEADS)
         # correlation volume (``model.correlation``): a 3x3 stride-2 conv of it added to
         # the first encoder conv, a 1x1 conv to the finest decoder conv; both zero at init,
-        # so a trained network is unchanged
+        # so a trained network is unchanged. The volume's shifted and column correlations
+        # follow its channels in that order, with convs of their own, so that each can be
+        # added to a trained network (zero at init)
         self.corr_first, self.corr_last = _zero_start_convs(corr_channels, e[0], d[-1])
-        # the volume's shifted correlations, the channels after ``corr_channels``: convs of
-        # their own, so that they can be added to a trained network (zero at init)
-        self.corr_channels = corr_channels
         self.shift_first, self.shift_last = _zero_start_convs(shift_channels, e[0], d[-1])
+        self.column_first, self.column_last = _zero_start_convs(column_channels, e[0], d[-1])
+        widths = (("corr", corr_channels), ("shift", shift_channels), ("column", column_channels))
+        self.volume_parts = tuple((name, width) for name, width in widths if width)
+
+    def _volume_slices(self, corr: torch.Tensor):
+        """(first conv, last conv, the part's channels of ``corr``) per part of the volume."""
+        start = 0
+        for name, width in self.volume_parts:
+            yield getattr(self, f"{name}_first"), getattr(self, f"{name}_last"), corr[:, start : start + width]
+            start += width
 
     def prepare(self, ref_padded: torch.Tensor, grid: PaddedGrid) -> ReferenceTerms:
         """Once per reference frame: the reference parts of the split convs."""
@@ -182,18 +192,13 @@ class SegNet2D(nn.Module):
         return ReferenceTerms(first=self.first_ref(ref_padded), skip=skip, feat=feat)
 
     def _corr_first(self, corr: torch.Tensor, grid: PaddedGrid, size_hw: tuple[int, int]) -> torch.Tensor:
-        """``corr_first`` (and ``shift_first`` of the shifted channels) on the volume."""
-        out = self._padded_first(self.corr_first, corr[:, : self.corr_channels], grid, size_hw)
-        if self.shift_first is not None:
-            out = out + self._padded_first(self.shift_first, corr[:, self.corr_channels :], grid, size_hw)
-        return out
+        """The first convs of the volume's parts (``corr_first``, ``shift_first``, ``column_first``)."""
+        return sum(self._padded_first(first, part, grid, size_hw) for first, _, part in self._volume_slices(corr))
 
     def _corr_last(self, corr: torch.Tensor, box: _MarginBox, size_hw: tuple[int, int]) -> torch.Tensor:
-        """``corr_last`` (1x1, no bias; ``shift_last`` of the shifted channels) of the
-        zero-padded volume cut to ``box``: the conv of the map, zero-padded into the box."""
-        out = self.corr_last(corr[:, : self.corr_channels])
-        if self.shift_last is not None:
-            out = out + self.shift_last(corr[:, self.corr_channels :])
+        """The last convs of the volume's parts (1x1, no bias) on the zero-padded volume cut
+        to ``box``: the convs of the map, zero-padded into the box."""
+        out = sum(last(part) for _, last, part in self._volume_slices(corr))
         return _pad_to(out, box.inner_top, box.inner_left, size_hw)
 
     @staticmethod
@@ -211,7 +216,7 @@ class SegNet2D(nn.Module):
         self, ref: ReferenceTerms, warped: torch.Tensor, grid: PaddedGrid, corr: torch.Tensor | None = None
     ) -> torch.Tensor:
         """warped (B*K, C, hp, wp) -> logits (B*K, 3, h, w), cropped to the unpadded map.
-        ``corr`` (B*K, 3G or 6G, h, w): the correlation volume on the unpadded map, when the config
+        ``corr`` (B*K, 3G, 6G or 9G, h, w): the correlation volume on the unpadded map, when the config
         has one and the hypothesis is a scale (the binary-flow heads run without it). It
         is zero in the padding, so its convs (no bias) run on the map alone and their
         outputs are zero-padded into place (``_corr_first``, ``_corr_last``): their result on

@@ -3,11 +3,15 @@
 Convention (pixel coordinates of the 1/3-resolution feature map, x to the right,
 y down, pixel centres at integers, image centre c = ((w-1)/2, (h-1)/2)):
     * scale warp:  warped_src(x) = src(c + eta_i * (x - c))      (eta_i = 1: identity)
+    * column warp: warped_src(x, y) = src(x, c_y + eta_i * (y - c_y))  (rows only)
     * shift warp:  warped_src(x) = src(x - s_i),  s_i = (u_i, v_i) / 3  [feature px]
 Both sample bilinearly with zeros outside ``src``. The output lives on the *padded*
 grid (``PaddedGrid``): the feature map zero-padded to ``pad_factor`` times its size,
 so that content scaled or shifted past the border is not cropped out (paper Sec. 4.3).
 Padded pixel (i, j) is original pixel (i - top, j - left).
+
+The column warp aligns what keeps its bearing while it nears: a road user on a collision
+course grows about its own column, not about the image centre (``model.correlation``).
 
 Why: a point seen at x_latest was at x_prev = c + eta (x_latest - c) when it expands
 about the centre with motion-in-depth eta, and at x_prev = x_latest - (u, v) when it
@@ -76,6 +80,19 @@ def scale_warp(src: torch.Tensor, eta: torch.Tensor, grid: PaddedGrid, unpadded:
         base = base[grid.top : grid.top + grid.h, grid.left : grid.left + grid.w]
     # normalised coords are centred on c, so c + eta (x - c) -> eta * n(x)
     sample = eta.reshape(b * k, 1, 1, 1).to(src.dtype) * base
+    src_k = src if src.shape[0] == b * k else _repeat_per_hypothesis(src, k)
+    return F.grid_sample(src_k, sample, mode="bilinear", padding_mode="zeros", align_corners=True)
+
+
+def column_warp(src: torch.Tensor, eta: torch.Tensor, grid: PaddedGrid, unpadded: bool = False) -> torch.Tensor:
+    """``scale_warp`` with each column sampled where it stands: the rows scaled about the
+    centre row by each eta (B, K); shapes as ``scale_warp``'s."""
+    b, k = eta.shape
+    base = grid.base_grid(src.device, src.dtype)  # (hp, wp, 2): normalised (x, y), centred
+    if unpadded:
+        base = base[grid.top : grid.top + grid.h, grid.left : grid.left + grid.w]
+    y = eta.reshape(b * k, 1, 1, 1).to(src.dtype) * base[..., 1:]
+    sample = torch.cat([base[..., :1].expand_as(y), y], dim=-1)
     src_k = src if src.shape[0] == b * k else _repeat_per_hypothesis(src, k)
     return F.grid_sample(src_k, sample, mode="bilinear", padding_mode="zeros", align_corners=True)
 
