@@ -2,8 +2,13 @@
 # The shipped weights grown into cpu-small-corr-column and fine-tuned on scenes with pedestrians
 # and cyclists, averaged with their start.
 #
-#   1. data: bittc_v9, the command in docs/train_vru_weights.sh
-#   2. this script: [START=FILE] [SHIP=1] bash docs/train_column_weights.sh [DATA_V9] [OUT] [RELEASE]
+#   1. data: bittc_v9 (0.1 s pairs) or bittc_v11 (0.3 s pairs), the commands in
+#      docs/train_vru_weights.sh and docs/train_pair3_weights.sh
+#   2. this script: [START=FILE] [SHIP=1] [FRAME_STRIDE=N] [TRUNK_LR_MULT=M] [NEAR_OUTSIDE_WEIGHT=W] \
+#        bash docs/train_column_weights.sh [DATA] [OUT] [RELEASE]
+#      bittc-2026.12-column:  bash docs/train_column_weights.sh data/bittc_v9 runs/column
+#      bittc-2026.12-column3: FRAME_STRIDE=3 TRUNK_LR_MULT=0.2 NEAR_OUTSIDE_WEIGHT=4 \
+#        bash docs/train_column_weights.sh data/bittc_v11 runs/column3 bittc-2026.12-column3
 #
 # START (default: the shipped weights, cpu-small-corr) is grown into cpu-small-corr-column: the
 # correlation volume gains the column warps' correlations (rows scaled about the centre row,
@@ -11,18 +16,28 @@
 # two convs that start at zero, so the grown start computes what START did. Then the recipe of
 # docs/train_vru_weights.sh (the binary stage with the road users' pixels weighted 6x, the
 # frozen continuous stage, the blend with the grown start), the new convs at 10x the learning
-# rate as the volume's own.
+# rate as the volume's own. FRAME_STRIDE: the data's pairs span that many network intervals
+# (3 for bittc_v11). TRUNK_LR_MULT: the feature extractor, SegNet and the refiner (all but the
+# volume's convs) learn at that multiple of the rate. NEAR_OUTSIDE_WEIGHT: bittc train
+# --near-outside-weight (the road just past a fence's static depth).
 set -euo pipefail
-DATA9=${1:-data/bittc_v9}
+DATA=${1:-data/bittc_v9}
 OUT=${2:-runs/column}
 RELEASE=${3:-bittc-2026.12-column}
 BINARY_STEPS=${BINARY_STEPS:-2000}
 CONT_STEPS=${CONT_STEPS:-250}
-export CONFIG=cpu-small-corr-column
+export CONFIG=cpu-small-corr-column FRAME_STRIDE=${FRAME_STRIDE:-1}
 mkdir -p "$OUT"
 python -c "import sys; from bittc_core.checkpoint import init_network, make_payload, save_checkpoint
 save_checkpoint(sys.argv[2], make_payload(init_network(sys.argv[1], sys.argv[3]), sys.argv[3], {'grown_from': sys.argv[1]}))" \
     "${START:-bittc_core/weights/bittc_default.pt}" "$OUT/grown.pt" "$CONFIG"
 START=$OUT/grown.pt
+flags=(--vru-weight 6 --lr-mult segnet.column_=10)
+if [ -n "${TRUNK_LR_MULT:-}" ]; then
+    flags+=(--lr-mult "features.=$TRUNK_LR_MULT" --lr-mult "segnet.=$TRUNK_LR_MULT" --lr-mult "refine.=$TRUNK_LR_MULT")
+fi
+if [ -n "${NEAR_OUTSIDE_WEIGHT:-}" ]; then
+    flags+=(--near-outside-weight "$NEAR_OUTSIDE_WEIGHT")
+fi
 source "$(dirname "$0")/release_steps.sh"
-finetune_release "$DATA9" "$OUT" "$RELEASE" 90 --vru-weight 6 --lr-mult segnet.column_=10
+finetune_release "$DATA" "$OUT" "$RELEASE" 90 "${flags[@]}"

@@ -220,3 +220,31 @@ def test_shifted_correlation_needs_the_volume():
         ModelConfig(corr_shift_px=2)
     with pytest.raises(ValueError, match="corr_shift_px=-1: must be >= 0"):
         ModelConfig(corr_groups=8, corr_shift_px=-1)
+
+
+def test_segnet_reads_each_part_of_the_volume_through_its_own_convs():
+    """The volume's channels go centre, shifted, column: each part's convs read its slice
+    only, so a part whose convs are zero may hold anything, and a part whose convs are
+    live changes the output."""
+    g = torch.Generator().manual_seed(5)
+    h, w = 6, 9
+    kw = dict(feat_channels=4, enc_channels=(6, 8), dec_channels=(8, 6), full_res_skip=True, norm="none")
+    net = SegNet2D(**kw, corr_channels=6, shift_channels=6, column_channels=6).eval()
+    assert net.volume_parts == (("corr", 6), ("shift", 6), ("column", 6))
+    for p in net.parameters():
+        p.data.normal_(0.0, 0.3, generator=g)
+    grid = PaddedGrid.for_features(h, w, 1.5, 4)
+    terms = net.prepare(grid.pad(torch.randn(1, 4, h, w, generator=g)), grid)
+    warped = scale_warp(torch.randn(1, 4, h, w, generator=g), torch.tensor([[0.8, 0.95]]), grid)
+    corr = torch.randn(2, 18, h, w, generator=g)
+    for i, part in enumerate(("corr", "shift", "column")):
+        other = corr.clone()
+        other[:, 6 * i : 6 * i + 6] = torch.randn(2, 6, h, w, generator=g)
+        with torch.no_grad():
+            assert not torch.allclose(net(terms, warped, grid, corr), net(terms, warped, grid, other))
+            live = [getattr(net, f"{part}_{end}").weight.clone() for end in ("first", "last")]
+            getattr(net, f"{part}_first").weight.zero_()
+            getattr(net, f"{part}_last").weight.zero_()
+            torch.testing.assert_close(net(terms, warped, grid, corr), net(terms, warped, grid, other))
+            getattr(net, f"{part}_first").weight.copy_(live[0])
+            getattr(net, f"{part}_last").weight.copy_(live[1])

@@ -1,11 +1,12 @@
-"""What the correlation volume's shifted correlations cost a job (``cpu-small-corr-shift``).
+"""What the correlation volume's added parts cost a job: its shifted correlations
+(``cpu-small-corr-shift``) or its column correlations (``cpu-small-corr-column``).
 
-Usage: python bench/bench_corr_shift.py [--calls N] [--threads T]
+Usage: python bench/bench_corr_parts.py [--config NAME] [--calls N] [--threads T]
 Times the streaming geofence call (one new frame extracted, the reference context, K = 4
 thresholds against the cached previous frame) of the wide view (96x288) for the shipped
-weights and for the same weights grown into ``cpu-small-corr-shift`` (its added convs
-start at zero; what a job costs does not depend on their weights), in interleaved rounds.
-Prints the medians [ms] and their ratio; nothing is asserted.
+weights and for the same weights grown into ``--config`` (default cpu-small-corr-shift;
+its added convs start at zero, and what a job costs does not depend on their weights), in
+interleaved rounds. Prints the medians [ms] and their ratio; nothing is asserted.
 """
 
 from __future__ import annotations
@@ -22,13 +23,14 @@ from bittc_core.checkpoint import DEFAULT_WEIGHTS, init_network, load_checkpoint
 from bittc_core.estimator import make_estimator
 from controllers.geofence import default_thresholds
 
-SHIFT_CONFIG = "cpu-small-corr-shift"
+GROWN_CONFIGS = ("cpu-small-corr-shift", "cpu-small-corr-column")
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--calls", type=int, default=100)
     ap.add_argument("--threads", type=int, default=2)
+    ap.add_argument("--config", choices=GROWN_CONFIGS, default=GROWN_CONFIGS[0])
     args = ap.parse_args()
     torch.set_num_threads(args.threads)
     thr = default_thresholds(4)
@@ -37,18 +39,18 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         grown = Path(tmp) / "grown.pt"
         meta = load_checkpoint(DEFAULT_WEIGHTS)["train_meta"]
-        save_checkpoint(grown, make_payload(init_network(DEFAULT_WEIGHTS, SHIFT_CONFIG), SHIFT_CONFIG, meta))
+        save_checkpoint(grown, make_payload(init_network(DEFAULT_WEIGHTS, args.config), args.config, meta))
         ests = {
             "cpu-small-corr (shipped)": make_estimator("bittc", device="cpu"),
-            SHIFT_CONFIG: make_estimator("bittc", weights=str(grown), device="cpu"),
+            args.config: make_estimator("bittc", weights=str(grown), device="cpu"),
         }
         calls = {name: (lambda a, b, est=est: est.geofence(a, b, thr)) for name, est in ests.items()}
         ms = interleaved_median_ms(calls, frames, warmup=5)
     print(f"streaming K = 4 wide-view geofence calls (96x288), {args.threads} threads, {args.calls} interleaved rounds")
     for name, t in ms.items():
         print(f"{name:>26}: {t:6.2f} ms")
-    base, shifted = ms["cpu-small-corr (shipped)"], ms[SHIFT_CONFIG]
-    print(f"{'ratio':>26}: {shifted / base:6.3f} (+{shifted - base:.2f} ms)")
+    base, grown_ms = ms["cpu-small-corr (shipped)"], ms[args.config]
+    print(f"{'ratio':>26}: {grown_ms / base:6.3f} (+{grown_ms - base:.2f} ms)")
 
 
 if __name__ == "__main__":
