@@ -128,7 +128,7 @@ def init_network(path: str | os.PathLike, config_name: str) -> BinaryTTCNet:
 
     The checkpoint's config must be that config, or one it grows from: the same sizes
     with fewer growth blocks, without the global-context block, the correlation volume or
-    its shifted correlations (``GROWTH_COUNTS``, ``GROWTH_FLAGS``, ``GROWTH_SWITCHES`` in
+    its shifted or column correlations (``GROWTH_COUNTS``, ``GROWTH_FLAGS``, ``GROWTH_SWITCHES`` in
     ``bittc_core.model.config``). The added modules keep their
     initialisation, the identity, so the network computes what the checkpoint did.
     """
@@ -142,7 +142,7 @@ def init_network(path: str | os.PathLike, config_name: str) -> BinaryTTCNet:
             f"initial checkpoint {str(path)!r}: its config ({name!r}) is neither "
             f"{config_name!r} nor a config {config_name!r} grows from "
             "(the same sizes with fewer growth blocks, no global-context block, no "
-            "correlation volume or no shifted correlations)"
+            "correlation volume, or no shifted or column correlations)"
         )
     net = BinaryTTCNet(target)
     added = set(net.state_dict()) - set(BinaryTTCNet(source).state_dict())

@@ -1,8 +1,10 @@
 # Shell functions the weight recipes share (sourced by docs/train_fovea_weights.sh,
-# docs/train_realism_weights.sh, docs/train_vru_weights.sh, docs/train_pair3_weights.sh and
-# docs/train_column_weights.sh).
+# docs/train_realism_weights.sh, docs/train_realism2_weights.sh, docs/train_vru_weights.sh,
+# docs/train_pair3_weights.sh and docs/train_column_weights.sh).
 # FRAME_STRIDE (default 1): the data's pairs span that many of the network's frame intervals.
-# CONFIG (default cpu-small-corr): the model config trained; START must be of it.
+# RECIPE_CONFIG: the model config trained, cpu-small-corr as sourced (not read from the
+# environment); a recipe of another config sets it after sourcing. START must be of it.
+RECIPE_CONFIG=cpu-small-corr
 
 name_release() {  # name_release SRC DST NAME: SRC's weights as a release named NAME
     python -c "import sys; from bittc_core.checkpoint import load_checkpoint, release_payload, save_checkpoint
@@ -22,7 +24,7 @@ finish_release() {  # finish_release START OUT RELEASE: OUT/continuous.pt named 
 }
 
 continuous_stage() {  # continuous_stage DATA OUT: the frozen continuous stage on OUT/binary.pt -> OUT/continuous.pt
-    bittc train --data "$1" --config "${CONFIG:-cpu-small-corr}" --stage continuous --freeze-binary --steps "$CONT_STEPS" \
+    bittc train --data "$1" --config "$RECIPE_CONFIG" --stage continuous --freeze-binary --steps "$CONT_STEPS" \
         --frame-stride "${FRAME_STRIDE:-1}" \
         --warmup-steps 50 --seed 0 --lr 2e-4 --val-every 125 --init "$2/binary.pt" --out "$2/continuous.pt"
 }
@@ -33,7 +35,7 @@ finetune_release() {  # finetune_release DATA OUT RELEASE SEED [FLAG...]: START 
     local data=$1 out=$2 release=$3 seed=$4
     shift 4
     cp "$START" "$out/start.pt"  # the start as it was, whatever SHIP later replaces
-    bittc train --data "$data" --config "${CONFIG:-cpu-small-corr}" --stage binary --steps "$BINARY_STEPS" --seed "$seed" \
+    bittc train --data "$data" --config "$RECIPE_CONFIG" --stage binary --steps "$BINARY_STEPS" --seed "$seed" \
         --frame-stride "${FRAME_STRIDE:-1}" \
         --lr 5e-5 --warmup-steps 100 --val-every 500 --val-limit 256 --lovasz-weight 0.5 --actor-weight 2 \
         --inpath-weight 4 "$@" --lr-mult segnet.corr_=10 --init "$out/start.pt" --out "$out/binary.pt"

@@ -26,7 +26,8 @@ OUT=${2:-runs/column}
 RELEASE=${3:-bittc-2026.12-column}
 BINARY_STEPS=${BINARY_STEPS:-2000}
 CONT_STEPS=${CONT_STEPS:-250}
-export CONFIG=cpu-small-corr-column FRAME_STRIDE=${FRAME_STRIDE:-1}
+export FRAME_STRIDE=${FRAME_STRIDE:-1}
+CONFIG=cpu-small-corr-column
 mkdir -p "$OUT"
 python -c "import sys; from bittc_core.checkpoint import init_network, make_payload, save_checkpoint
 save_checkpoint(sys.argv[2], make_payload(init_network(sys.argv[1], sys.argv[3]), sys.argv[3], {'grown_from': sys.argv[1]}))" \
@@ -40,4 +41,5 @@ if [ -n "${NEAR_OUTSIDE_WEIGHT:-}" ]; then
     flags+=(--near-outside-weight "$NEAR_OUTSIDE_WEIGHT")
 fi
 source "$(dirname "$0")/release_steps.sh"
+RECIPE_CONFIG=$CONFIG
 finetune_release "$DATA" "$OUT" "$RELEASE" 90 "${flags[@]}"

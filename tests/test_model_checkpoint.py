@@ -22,6 +22,7 @@ from bittc_core.checkpoint import (
     save_checkpoint,
 )
 from bittc_core.model import BinaryTTCNet, get_config
+from bittc_core.model.config import ModelConfig
 
 
 def test_round_trip_rebuilds_the_same_network(tmp_path):
@@ -110,6 +111,14 @@ def _make_shift_last_live(net):
     net.segnet.shift_last.weight.fill_(0.5)
 
 
+def _make_column_first_live(net):
+    net.segnet.column_first.weight.fill_(0.5)
+
+
+def _make_column_last_live(net):
+    net.segnet.column_last.weight.fill_(0.5)
+
+
 @pytest.mark.parametrize(
     "source, grown, make_live",
     [
@@ -120,6 +129,8 @@ def _make_shift_last_live(net):
         ("cpu-small-corr", "cpu-small-corr-gc", _make_context_live),
         ("cpu-small-corr", "cpu-small-corr-shift", _make_shift_first_live),
         ("cpu-small-corr", "cpu-small-corr-shift", _make_shift_last_live),
+        ("cpu-small-corr", "cpu-small-corr-column", _make_column_first_live),
+        ("cpu-small-corr", "cpu-small-corr-column", _make_column_last_live),
     ],
 )
 def test_init_grows_as_the_identity(tmp_path, source, grown, make_live):
@@ -180,6 +191,11 @@ def test_grows_into_only_adds_identity_modules():
     assert grows_into(corr, shifted) and grows_into(tiny, shifted)
     assert not grows_into(shifted, dataclasses.replace(corr, corr_shift_px=3))
     assert not grows_into(shifted, corr)
+    # the column correlations: switched on beside the volume, never off
+    column = dataclasses.replace(corr, corr_column=True)
+    assert grows_into(corr, column) and grows_into(tiny, column)
+    assert grows_into(shifted, dataclasses.replace(shifted, corr_column=True))
+    assert not grows_into(column, corr) and not grows_into(column, shifted) and not grows_into(shifted, column)
     assert not grows_into(tiny, dataclasses.replace(tiny, dec_extra_blocks=1, feat_channels=12))  # resized
 
 
@@ -208,3 +224,11 @@ def test_a_foreign_file_is_named_as_not_a_bittc_checkpoint_without_torch_advice(
         msg = str(e.value)
         assert f"{str(path)!r} is not a bittc checkpoint" in msg, msg
         assert "weights_only" not in msg and "torch.load" not in msg and "safe_globals" not in msg, msg
+
+
+def test_a_config_stored_before_the_column_correlations_loads_without_them():
+    """A checkpoint written before ``corr_column`` existed stores no such key: it loads
+    with the column correlations off, the config it was trained as."""
+    stored = dataclasses.asdict(get_config("cpu-small-corr"))
+    del stored["corr_column"]
+    assert ModelConfig.from_dict(stored) == get_config("cpu-small-corr")
