@@ -19,7 +19,8 @@ import numpy as np
 import torch
 
 from bittc_core.benchmark import interleaved_median_ms
-from bittc_core.checkpoint import DEFAULT_WEIGHTS, init_network, load_checkpoint, make_payload, save_checkpoint
+from bittc_core.checkpoint import DEFAULT_WEIGHTS, save_checkpoint
+from bittc_core.checkpoint_ops import grown_payload
 from bittc_core.estimator import make_estimator
 from controllers.geofence import default_thresholds
 
@@ -38,8 +39,7 @@ def main() -> None:
     frames = [rng.integers(0, 256, (96, 288, 3), dtype=np.uint8) for _ in range(args.calls + 6)]
     with tempfile.TemporaryDirectory() as tmp:
         grown = Path(tmp) / "grown.pt"
-        meta = load_checkpoint(DEFAULT_WEIGHTS)["train_meta"]
-        save_checkpoint(grown, make_payload(init_network(DEFAULT_WEIGHTS, args.config), args.config, meta))
+        save_checkpoint(grown, grown_payload(DEFAULT_WEIGHTS, args.config))
         ests = {
             "cpu-small-corr (shipped)": make_estimator("bittc", device="cpu"),
             args.config: make_estimator("bittc", weights=str(grown), device="cpu"),

@@ -1,4 +1,4 @@
-"""Operations on checkpoints of one config: a weight average and an ablation copy.
+"""Operations on checkpoints: a weight average, an ablation copy and a grown copy.
 
 * :func:`average_checkpoints`: the element-wise mean of checkpoints of one config. Runs
   fine-tuned from the same weights stay in one basin of the loss, where the mean of
@@ -8,8 +8,11 @@
 * :func:`zero_layers`: a copy with residual branches' last layers zeroed. Some branches
   add a residual through a last layer that starts at zero, so zeroing it removes the
   branch and leaves everything else unchanged (``ABLATION_LAYERS``).
+* :func:`grown_payload`: the weights of a checkpoint in a config that grows from its own
+  (``bittc_core.checkpoint.init_network``: the added modules start as the identity), to
+  train or time the larger config from exactly what the checkpoint computes.
 
-Both return a payload for :func:`bittc_core.checkpoint.save_checkpoint`; nothing is written.
+All return a payload for :func:`bittc_core.checkpoint.save_checkpoint`; nothing is written.
 """
 
 from __future__ import annotations
@@ -18,7 +21,7 @@ import os
 
 import torch
 
-from bittc_core.checkpoint import CheckpointError, load_checkpoint, release_payload
+from bittc_core.checkpoint import CheckpointError, init_network, load_checkpoint, make_payload, release_payload
 
 #: layer -> what zeroing it removes
 ABLATION_LAYERS = {
@@ -67,3 +70,9 @@ def zero_layers(source: str | os.PathLike, layers: list[str]) -> dict:
                 state[key].zero_()
     ckpt["train_meta"] = {**ckpt.get("train_meta", {}), "zeroed_layers": list(layers)}
     return ckpt
+
+
+def grown_payload(source: str | os.PathLike, config_name: str) -> dict:
+    """``source``'s weights grown into config ``config_name`` (one that grows from the
+    checkpoint's), as a payload whose ``train_meta`` names the source."""
+    return make_payload(init_network(source, config_name), config_name, {"grown_from": str(source)})

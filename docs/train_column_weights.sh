@@ -29,9 +29,8 @@ CONT_STEPS=${CONT_STEPS:-250}
 export FRAME_STRIDE=${FRAME_STRIDE:-1}
 CONFIG=cpu-small-corr-column
 mkdir -p "$OUT"
-python -c "import sys; from bittc_core.checkpoint import init_network, make_payload, save_checkpoint
-save_checkpoint(sys.argv[2], make_payload(init_network(sys.argv[1], sys.argv[3]), sys.argv[3], {'grown_from': sys.argv[1]}))" \
-    "${START:-bittc_core/weights/bittc_default.pt}" "$OUT/grown.pt" "$CONFIG"
+python -c "import sys; from bittc_core.checkpoint import save_checkpoint; from bittc_core.checkpoint_ops import grown_payload
+save_checkpoint(sys.argv[2], grown_payload(sys.argv[1], sys.argv[3]))" "${START:-bittc_core/weights/bittc_default.pt}" "$OUT/grown.pt" "$CONFIG"
 START=$OUT/grown.pt
 flags=(--vru-weight 6 --lr-mult segnet.column_=10)
 if [ -n "${TRUNK_LR_MULT:-}" ]; then

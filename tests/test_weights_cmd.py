@@ -1,10 +1,11 @@
-"""`bittc weights average|zero`: the mean of checkpoints of one config, and an ablation copy."""
+"""`bittc weights average|zero`: the mean of checkpoints of one config, and an ablation copy;
+and the grown copy the weight recipes train from (``checkpoint_ops.grown_payload``)."""
 
 import pytest
 import torch
 
 from bittc_core.checkpoint import CheckpointError, load_checkpoint, make_payload, save_checkpoint
-from bittc_core.checkpoint_ops import average_checkpoints, zero_layers
+from bittc_core.checkpoint_ops import average_checkpoints, grown_payload, zero_layers
 from bittc_core.model import BinaryTTCNet, get_config
 from sim.cli import main
 
@@ -77,3 +78,20 @@ def test_zeroing_an_unknown_layer_names_it_and_writes_nothing(tmp_path, capsys):
     assert main(["weights", "zero", a, "--layers", "segnet.nope", "--out", str(tmp_path / "z.pt")]) == 2
     assert "segnet.nope" in capsys.readouterr().err
     assert not (tmp_path / "z.pt").exists()
+
+
+def test_a_grown_copy_keeps_the_weights_and_adds_the_column_convs(tmp_path):
+    """The grown payload is the checkpoint in the larger config: every weight it had,
+    the added convs at zero, and a note of where it came from."""
+    src, state = saved(tmp_path / "corr.pt", "cpu-small-corr", 0)
+    payload = grown_payload(src, "cpu-small-corr-column")
+    assert payload["config_name"] == "cpu-small-corr-column" and payload["train_meta"] == {"grown_from": src}
+    grown = payload["state_dict"]
+    for key, value in state.items():
+        assert torch.equal(grown[key], value)
+    added = sorted(set(grown) - set(state))
+    assert added == ["segnet.column_first.weight", "segnet.column_last.weight"]
+    assert all(not grown[k].any() for k in added)
+    save_checkpoint(tmp_path / "grown.pt", payload)  # column correlations never turn into shifted ones
+    with pytest.raises(CheckpointError, match="neither 'cpu-small-corr-shift' nor"):
+        grown_payload(tmp_path / "grown.pt", "cpu-small-corr-shift")

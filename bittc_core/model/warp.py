@@ -70,31 +70,37 @@ def _repeat_per_hypothesis(src: torch.Tensor, k: int) -> torch.Tensor:
     return src[:, None].expand(b, k, c, h, w).reshape(b * k, c, h, w)
 
 
+def _warp_about_centre(
+    src: torch.Tensor, eta: torch.Tensor, grid: PaddedGrid, unpadded: bool, columns_in_place: bool
+) -> torch.Tensor:
+    """``src`` sampled at c + eta (x - c) for each eta (B, K), in both coordinates or, with
+    ``columns_in_place``, in y only (shapes: ``scale_warp``)."""
+    b, k = eta.shape
+    base = grid.base_grid(src.device, src.dtype)  # (hp, wp, 2): normalised (x, y), centred
+    if unpadded:
+        base = base[grid.top : grid.top + grid.h, grid.left : grid.left + grid.w]
+    # normalised coords are centred on c, so c + eta (x - c) -> eta * n(x)
+    scale = eta.reshape(b * k, 1, 1, 1).to(src.dtype)
+    if columns_in_place:
+        y = scale * base[..., 1:]
+        sample = torch.cat([base[..., :1].expand_as(y), y], dim=-1)
+    else:
+        sample = scale * base
+    src_k = src if src.shape[0] == b * k else _repeat_per_hypothesis(src, k)
+    return F.grid_sample(src_k, sample, mode="bilinear", padding_mode="zeros", align_corners=True)
+
+
 def scale_warp(src: torch.Tensor, eta: torch.Tensor, grid: PaddedGrid, unpadded: bool = False) -> torch.Tensor:
     """Scale ``src`` (B, C, h, w), or one source per hypothesis (B*K, C, h, w, batch-major),
     about its centre for each eta (B, K) -> (B*K, C, hp, wp), or only the unpadded part of
     that, (B*K, C, h, w), with ``unpadded``."""
-    b, k = eta.shape
-    base = grid.base_grid(src.device, src.dtype)  # (hp, wp, 2)
-    if unpadded:
-        base = base[grid.top : grid.top + grid.h, grid.left : grid.left + grid.w]
-    # normalised coords are centred on c, so c + eta (x - c) -> eta * n(x)
-    sample = eta.reshape(b * k, 1, 1, 1).to(src.dtype) * base
-    src_k = src if src.shape[0] == b * k else _repeat_per_hypothesis(src, k)
-    return F.grid_sample(src_k, sample, mode="bilinear", padding_mode="zeros", align_corners=True)
+    return _warp_about_centre(src, eta, grid, unpadded, columns_in_place=False)
 
 
 def column_warp(src: torch.Tensor, eta: torch.Tensor, grid: PaddedGrid, unpadded: bool = False) -> torch.Tensor:
     """``scale_warp`` with each column sampled where it stands: the rows scaled about the
     centre row by each eta (B, K); shapes as ``scale_warp``'s."""
-    b, k = eta.shape
-    base = grid.base_grid(src.device, src.dtype)  # (hp, wp, 2): normalised (x, y), centred
-    if unpadded:
-        base = base[grid.top : grid.top + grid.h, grid.left : grid.left + grid.w]
-    y = eta.reshape(b * k, 1, 1, 1).to(src.dtype) * base[..., 1:]
-    sample = torch.cat([base[..., :1].expand_as(y), y], dim=-1)
-    src_k = src if src.shape[0] == b * k else _repeat_per_hypothesis(src, k)
-    return F.grid_sample(src_k, sample, mode="bilinear", padding_mode="zeros", align_corners=True)
+    return _warp_about_centre(src, eta, grid, unpadded, columns_in_place=True)
 
 
 def shift_warp(src: torch.Tensor, shift_feat: torch.Tensor, grid: PaddedGrid) -> torch.Tensor:
