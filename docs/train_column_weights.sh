@@ -5,15 +5,20 @@
 #   1. data: bittc_v9 (0.1 s pairs) or bittc_v11 (0.3 s pairs), the commands in
 #      docs/train_vru_weights.sh and docs/train_pair3_weights.sh
 #   2. this script: [START=FILE] [SHIP=1] [FRAME_STRIDE=N] [TRUNK_LR_MULT=M] [NEAR_OUTSIDE_WEIGHT=W] \
-#        bash docs/train_column_weights.sh [DATA] [OUT] [RELEASE]
+#        [COLUMN_CONFIG=NAME] bash docs/train_column_weights.sh [DATA] [OUT] [RELEASE]
 #      bittc-2026.12-column:  bash docs/train_column_weights.sh data/bittc_v9 runs/column
 #      bittc-2026.12-column3: FRAME_STRIDE=3 TRUNK_LR_MULT=0.2 NEAR_OUTSIDE_WEIGHT=4 \
 #        bash docs/train_column_weights.sh data/bittc_v11 runs/column3 bittc-2026.12-column3
+#      bittc-2026.12-column-input3: COLUMN_CONFIG=cpu-small-corr-column-input FRAME_STRIDE=3 \
+#        TRUNK_LR_MULT=0.2 NEAR_OUTSIDE_WEIGHT=4 bash docs/train_column_weights.sh data/bittc_v11 \
+#        runs/column-input3 bittc-2026.12-column-input3
 #
-# START (default: the shipped weights, cpu-small-corr) is grown into cpu-small-corr-column: the
-# correlation volume gains the column warps' correlations (rows scaled about the centre row,
-# each column in place, where a road user on a collision course aligns; docs/vru.md), through
-# two convs that start at zero, so the grown start computes what START did. Then the recipe of
+# START (default: the shipped weights, cpu-small-corr) is grown into COLUMN_CONFIG (default
+# cpu-small-corr-column): the correlation volume gains the column warps' correlations (rows
+# scaled about the centre row, each column in place, where a road user on a collision course
+# aligns; docs/vru.md), through two convs that start at zero, so the grown start computes what
+# START did; cpu-small-corr-column-input also reads the source warped by columns as a second
+# input, through a conv of its own that starts at zero. Then the recipe of
 # docs/train_vru_weights.sh (the binary stage with the road users' pixels weighted 6x, the
 # frozen continuous stage, the blend with the grown start), the new convs at 10x the learning
 # rate as the volume's own. FRAME_STRIDE: the data's pairs span that many network intervals
@@ -27,7 +32,7 @@ RELEASE=${3:-bittc-2026.12-column}
 BINARY_STEPS=${BINARY_STEPS:-2000}
 CONT_STEPS=${CONT_STEPS:-250}
 export FRAME_STRIDE=${FRAME_STRIDE:-1}
-CONFIG=cpu-small-corr-column
+CONFIG=${COLUMN_CONFIG:-cpu-small-corr-column}
 mkdir -p "$OUT"
 python -c "import sys; from bittc_core.checkpoint import save_checkpoint; from bittc_core.checkpoint_ops import grown_payload
 save_checkpoint(sys.argv[2], grown_payload(sys.argv[1], sys.argv[3]))" "${START:-bittc_core/weights/bittc_default.pt}" "$OUT/grown.pt" "$CONFIG"

@@ -14,13 +14,16 @@ SIZE = (24, 48)  # (H, W) of the tiny network's test frames
 HALF = (24, 24)  # (H, W) of a view half as wide (as the fovea beside the wide view)
 
 
-def tiny_checkpoint(path, seed: int = 0, shift_px: int = 0, column: bool = False):
+def tiny_checkpoint(path, seed: int = 0, shift_px: int = 0, column: bool = False, column_input: bool = False):
     torch.manual_seed(seed)
     # the correlation volume too (its shifted correlations with ``shift_px``, its column
-    # correlations with ``column``)
-    cfg = dataclasses.replace(get_config("tiny"), corr_groups=4, corr_shift_px=shift_px, corr_column=column)
+    # correlations with ``column``, and the source warped by columns as SegNet's second
+    # input with ``column_input``)
+    cfg = dataclasses.replace(
+        get_config("tiny"), corr_groups=4, corr_shift_px=shift_px, corr_column=column, column_input=column_input
+    )
     net = BinaryTTCNet(cfg).eval()
-    for part in ("shift",) * bool(shift_px) + ("column",) * column:
+    for part in ("shift",) * bool(shift_px) + ("column",) * column + ("column_src",) * column_input:
         with torch.no_grad():  # the added parts' convs start at zero: make them count
             getattr(net.segnet, f"{part}_first").weight.normal_(0.0, 0.3)
             getattr(net.segnet, f"{part}_last").weight.normal_(0.0, 0.3)

@@ -119,6 +119,10 @@ def _make_column_last_live(net):
     net.segnet.column_last.weight.fill_(0.5)
 
 
+def _make_column_input_live(net):
+    net.segnet.column_src_first.weight.fill_(0.5)  # the source warped by columns, into the first conv
+
+
 @pytest.mark.parametrize(
     "source, grown, make_live",
     [
@@ -131,6 +135,8 @@ def _make_column_last_live(net):
         ("cpu-small-corr", "cpu-small-corr-shift", _make_shift_last_live),
         ("cpu-small-corr", "cpu-small-corr-column", _make_column_first_live),
         ("cpu-small-corr", "cpu-small-corr-column", _make_column_last_live),
+        ("cpu-small-corr", "cpu-small-corr-column-input", _make_column_input_live),
+        ("cpu-small-corr-column", "cpu-small-corr-column-input", _make_column_input_live),
     ],
 )
 def test_init_grows_as_the_identity(tmp_path, source, grown, make_live):
@@ -196,6 +202,10 @@ def test_grows_into_only_adds_identity_modules():
     assert grows_into(corr, column) and grows_into(tiny, column)
     assert grows_into(shifted, dataclasses.replace(shifted, corr_column=True))
     assert not grows_into(column, corr) and not grows_into(column, shifted) and not grows_into(shifted, column)
+    # the second input (the source warped by columns): switched on, never off
+    column_input = dataclasses.replace(column, column_input=True)
+    assert grows_into(column, column_input) and grows_into(corr, column_input) and grows_into(tiny, column_input)
+    assert not grows_into(column_input, column)
     assert not grows_into(tiny, dataclasses.replace(tiny, dec_extra_blocks=1, feat_channels=12))  # resized
 
 
@@ -230,5 +240,5 @@ def test_a_config_stored_before_the_column_correlations_loads_without_them():
     """A checkpoint written before ``corr_column`` existed stores no such key: it loads
     with the column correlations off, the config it was trained as."""
     stored = dataclasses.asdict(get_config("cpu-small-corr"))
-    del stored["corr_column"]
+    del stored["corr_column"], stored["column_input"]
     assert ModelConfig.from_dict(stored) == get_config("cpu-small-corr")

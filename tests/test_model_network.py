@@ -7,8 +7,10 @@ import torch
 
 from bittc_core.model import CONFIGS, BinaryTTCNet, count_parameters, get_config
 from bittc_core.model.auc import auc_eta, uniform_levels
+from bittc_core.model.correlation import scale_correlation
 from bittc_core.model.network import CPU_INFERENCE_HYPOTHESES
 from bittc_core.model.segnet import _broadcast_add
+from bittc_core.model.warp import column_warp, scale_warp
 
 H, W = 48, 96
 
@@ -116,6 +118,7 @@ def test_registered_config_sizes():
         corr = count_parameters(BinaryTTCNet(CONFIGS["cpu-small-corr"]))
         shift = count_parameters(BinaryTTCNet(CONFIGS["cpu-small-corr-shift"]))
         column = count_parameters(BinaryTTCNet(CONFIGS["cpu-small-corr-column"]))
+        column_input = count_parameters(BinaryTTCNet(CONFIGS["cpu-small-corr-column-input"]))
         tiny = count_parameters(BinaryTTCNet(CONFIGS["tiny"]))
     assert 88e6 < paper < 94e6  # "about 91 M"
     assert tiny < small < gc < 2e6  # cpu-small-gc = cpu-small + the global-context block
@@ -123,6 +126,7 @@ def test_registered_config_sizes():
     assert corr - small == 3 * 8 * 16 * (9 + 1)  # cpu-small-corr: 3 warps x 8 groups into 16-ch 3x3 and 1x1 convs
     assert shift - corr == 3 * 8 * 16 * (9 + 1)  # the shifted correlations: as many again, their own convs
     assert column - corr == 3 * 8 * 16 * (9 + 1)  # the column correlations: the same
+    assert column_input - column == 16 * 16 * 9  # the source warped by columns: one 16-ch 3x3 conv
     assert CONFIGS["paper"].norm == "none" and CONFIGS["cpu-small"].norm != "none"
 
 
@@ -136,6 +140,8 @@ def test_registered_config_sizes():
         ("corr_shift_px", {"corr_groups": 2}),
         ("corr_column", {"corr_groups": 2}),
         ("corr_column", {"corr_groups": 2, "corr_shift_px": 1}),
+        ("column_input", {"corr_groups": 2, "corr_column": True}),
+        ("column_input", {}),
     ],
 )
 def test_growth_blocks_start_as_the_identity(field, base):
@@ -145,7 +151,9 @@ def test_growth_blocks_start_as_the_identity(field, base):
     then runs on a wider crop, so its batch norm takes its statistics over more pixels."""
     torch.manual_seed(0)
     small = BinaryTTCNet(dataclasses.replace(CONFIGS["tiny"], **base))
-    grown = BinaryTTCNet(dataclasses.replace(CONFIGS["tiny"], **base, **{field: True if field == "corr_column" else 2}))
+    grown = BinaryTTCNet(
+        dataclasses.replace(CONFIGS["tiny"], **base, **{field: True if field in ("corr_column", "column_input") else 2})
+    )
     if base:  # a trained volume: live, so the grown network must keep what it adds
         with torch.no_grad():
             small.segnet.corr_first.weight.normal_(0.0, 0.3)
@@ -180,3 +188,31 @@ def test_correlation_groups_must_divide_the_features():
     for step in (0.0, float("nan")):
         with pytest.raises(ValueError, match=f"corr_log_step={step}"):
             dataclasses.replace(CONFIGS["tiny"], corr_groups=2, corr_log_step=step)
+
+
+def test_the_column_input_is_the_column_warp_read_through_its_own_convs():
+    """SegNet's second input is the source warped by columns; the volume's centre column
+    correlation reads it instead of warping again, with the same result; each of its two
+    convs (the finest one with ``full_res_skip``) reaches the logits."""
+    torch.manual_seed(0)
+    cfg = dataclasses.replace(CONFIGS["tiny"], corr_groups=2, corr_column=True, column_input=True)
+    net = BinaryTTCNet(cfg).eval()
+    prev, latest = torch.rand(1, 3, 48, 96), torch.rand(1, 3, 48, 96)
+    eta = torch.tensor([[0.8, 0.95]])
+    with torch.no_grad():
+        feats = net.extract(torch.cat((prev, latest)))
+        ctx = net.prepare_reference(feats[1:], latest)
+        inputs = net.scale_inputs(ctx.terms.feat, feats[:1], eta, ctx.grid)
+        torch.testing.assert_close(inputs.column_warped, column_warp(feats[:1], eta, ctx.grid), rtol=0, atol=0)
+        torch.testing.assert_close(inputs.warped, scale_warp(feats[:1], eta, ctx.grid), rtol=0, atol=0)
+        unshared = scale_correlation(
+            ctx.terms.feat, feats[:1], eta, inputs.warped, ctx.grid, 2, cfg.corr_log_step, 0, True
+        )
+        torch.testing.assert_close(inputs.corr, unshared, rtol=0, atol=0)
+        base = net(prev, latest, eta)
+        for name in ("column_src_first", "column_src_last"):
+            layer = getattr(net.segnet, name)
+            layer.weight.normal_(0.0, 0.3)
+            assert not torch.allclose(net(prev, latest, eta), base), name
+            layer.weight.zero_()
+        torch.testing.assert_close(net(prev, latest, eta), base, rtol=0, atol=0)

@@ -55,10 +55,11 @@ def test_tiny_round_trip_matches_torch(tiny_export):
     assert ort.feature_computations == 6  # the streaming cache: each frame extracted once
 
 
-@pytest.mark.parametrize("shift_px, column", [(1, False), (0, True)])
-def test_shifted_and_column_correlations_export(tmp_path, shift_px, column):
-    """A network with the volume's shifted or column correlations exports and matches torch."""
-    ckpt = tiny_checkpoint(tmp_path / "shift.pt", seed=1, shift_px=shift_px, column=column)
+@pytest.mark.parametrize("shift_px, column, column_input", [(1, False, False), (0, True, False), (0, True, True)])
+def test_shifted_and_column_correlations_export(tmp_path, shift_px, column, column_input):
+    """A network with the volume's shifted or column correlations, or the source warped by
+    columns as a second input, exports and matches torch."""
+    ckpt = tiny_checkpoint(tmp_path / "shift.pt", seed=1, shift_px=shift_px, column=column, column_input=column_input)
     export_onnx(ckpt, tmp_path / "onnx", sizes=[SIZE])
     ref = make_estimator("bittc", weights=str(ckpt), device="cpu")
     ort = make_estimator("bittc", weights=str(ckpt), backend="onnxruntime", onnx=str(tmp_path / "onnx"))

@@ -33,7 +33,7 @@ from bittc_core.model import BinaryTTCNet
 from bittc_core.model.auc import auc_eta, uniform_levels
 from bittc_core.model.network import FEATURE_STRIDE
 from bittc_core.model.segnet import HEAD_TTC, ReferenceTerms
-from bittc_core.model.warp import PaddedGrid, scale_warp
+from bittc_core.model.warp import PaddedGrid
 
 GRAPHS = ("extractor", "reference", "thresholds", "continuous")
 
@@ -71,9 +71,8 @@ class _Graph(nn.Module):
         net, grid = self.net, self.grid
         terms, guide = self._terms(refs)
         v, k = eta.shape
-        warped = scale_warp(feat_prev, eta, grid)
-        corr = net.correlation(terms.feat, feat_prev, eta, warped, grid)
-        coarse = net.segnet(terms, warped, grid, corr)[:, HEAD_TTC : HEAD_TTC + 1]
+        inputs = net.scale_inputs(terms.feat, feat_prev, eta, grid)
+        coarse = net.segnet(terms, inputs.warped, grid, inputs.corr, inputs.column_warped)[:, HEAD_TTC : HEAD_TTC + 1]
         coarse = F.interpolate(coarse, size=self.size, mode="bilinear", align_corners=False)
         return net.refine(guide, coarse).view(v, k, *self.size)
 

@@ -26,7 +26,7 @@ NORMS = ("none", "batch", "group")
 #: Unchanged in eval mode, exactly; in train mode the finest decoder level's batch norm
 #: takes its statistics over a crop widened by 2 px a side per decoder growth block.
 GROWTH_COUNTS = ("feat_extra_blocks", "dec_extra_blocks", "refine_extra_blocks")
-GROWTH_FLAGS = ("global_context", "corr_column")
+GROWTH_FLAGS = ("global_context", "corr_column", "column_input")
 #: Growth switches: counts that may only be switched on (0 -> n) by growth: the
 #: correlation volume's convs start at zero, but its width depends on the count, so
 #: n -> m != n does not carry over; the shifted correlations' width does not depend on
@@ -62,6 +62,10 @@ class ModelConfig:
     # each column left in place (rows scaled only), where a road user on a collision course
     # aligns; convs start at zero
     corr_column: bool = False
+    # the source features warped by columns (``model.warp.column_warp``) as a second input
+    # beside the centre-warped one, through their own conv into SegNet's first encoder conv
+    # (and finest decoder conv with ``full_res_skip``); those start at zero
+    column_input: bool = False
     # SegRefineNet (guided by the reference image)
     guide_channels: int = 16
     refine_channels: int = 8
@@ -157,6 +161,11 @@ class ModelConfig:
 #: SegNet's first and last convs by two more convs that start at zero, trained from a
 #: ``cpu-small-corr`` checkpoint: a road user on a collision course keeps its bearing, so
 #: it grows about its own column, where the scale warp about the centre misses it.
+#: ``cpu-small-corr-column-input``: ``cpu-small-corr-column`` plus the source features
+#: warped by columns as a second input of SegNet's first encoder conv, through a conv of
+#: their own that starts at zero, trained from a ``cpu-small-corr`` or
+#: ``cpu-small-corr-column`` checkpoint: SegNet reads both alignments, not only their
+#: correlations.
 #: ``tiny``: unit tests only.
 _CPU_SMALL = ModelConfig(
     stem_channels=16,
@@ -184,6 +193,7 @@ CONFIGS: dict[str, ModelConfig] = {
     "cpu-small-corr-gc": dataclasses.replace(_CPU_SMALL, corr_groups=8, global_context=True),
     "cpu-small-corr-shift": dataclasses.replace(_CPU_SMALL, corr_groups=8, corr_shift_px=2),
     "cpu-small-corr-column": dataclasses.replace(_CPU_SMALL, corr_groups=8, corr_column=True),
+    "cpu-small-corr-column-input": dataclasses.replace(_CPU_SMALL, corr_groups=8, corr_column=True, column_input=True),
     "tiny": ModelConfig(
         stem_channels=8,
         feat_channels=8,

@@ -103,6 +103,7 @@ def scale_correlation(
     log_step: float,
     max_shift: int = 0,
     column: bool = False,
+    column_warped: torch.Tensor | None = None,
 ) -> torch.Tensor:
     """Correlation volume of the three warps about each eta (B, K) -> (B*K, 3G, h, w), on
     the unpadded map; with ``max_shift`` > 0 the three warps' shifted correlations follow
@@ -110,7 +111,9 @@ def scale_correlation(
 
     ``ref`` (B, C, h, w) are the unpadded reference features, ``warped`` is
     ``scale_warp(src, eta, grid)``, already computed for SegNet's input. The reference is
-    zero in the padding, so is the correlation there: it is computed on the unpadded map
+    zero in the padding, so is the correlation there (``column_warped``, where given, is
+    ``column_warp(src, eta, grid)``, SegNet's second input, read in place of the centre
+    column warp): it is computed on the unpadded map
     only (the outer warps too) and never padded; SegNet places what its convs make of it
     (``SegNet2D.forward``)."""
     warps = [
@@ -122,7 +125,13 @@ def scale_correlation(
         parts += [shifted_correlation(ref, w, groups, max_shift) for w in warps]
     if column:
         parts += [
-            group_correlation(ref, column_warp(src, eta * math.exp(o * log_step), grid, unpadded=True), groups)
+            group_correlation(
+                ref,
+                grid.crop(column_warped)
+                if o == 0.0 and column_warped is not None
+                else column_warp(src, eta * math.exp(o * log_step), grid, unpadded=True),
+                groups,
+            )
             for o in CORR_OFFSETS
         ]
     return torch.cat(parts, dim=1)

@@ -31,7 +31,7 @@ from bittc_core.model.correlation import CORR_OFFSETS, scale_correlation
 from bittc_core.model.extractor import FeatExtractNet
 from bittc_core.model.refine import SegRefineNet
 from bittc_core.model.segnet import HEAD_TTC, HEAD_U, HEAD_V, ReferenceTerms, SegNet2D
-from bittc_core.model.warp import PaddedGrid, scale_warp, shift_warp
+from bittc_core.model.warp import PaddedGrid, column_warp, scale_warp, shift_warp
 
 FEATURE_STRIDE = 3  # [input px per feature px]
 # hypotheses per SegNet batch at inference on a CPU: on 2 cores at 96x288, 24 thresholds
@@ -48,6 +48,15 @@ class ReferenceContext:
     grid: PaddedGrid
     terms: ReferenceTerms
     guide: torch.Tensor  # (B, refine_ch, H, W)
+
+
+@dataclass
+class SegNetInputs:
+    """What SegNet reads for B*K hypotheses (``SegNet2D.forward``)."""
+
+    warped: torch.Tensor  # (B*K, C, hp, wp) the source warped by the hypothesis
+    corr: torch.Tensor | None = None  # (B*K, n, h, w) the correlation volume, unpadded
+    column_warped: torch.Tensor | None = None  # (B*K, C, hp, wp) the source warped by columns
 
 
 @dataclass
@@ -83,6 +92,7 @@ class BinaryTTCNet(nn.Module):
             corr_channels=len(CORR_OFFSETS) * c.corr_groups,
             shift_channels=len(CORR_OFFSETS) * c.corr_groups if c.corr_shift_px else 0,
             column_channels=len(CORR_OFFSETS) * c.corr_groups if c.corr_column else 0,
+            column_input=c.column_input,
         )
         self.refine = SegRefineNet(
             guide_channels=c.guide_channels,
@@ -112,24 +122,37 @@ class BinaryTTCNet(nn.Module):
         return ReferenceContext(image=image_ref, grid=grid, terms=terms, guide=self.refine.guide(image_ref))
 
     # -- per hypothesis ---------------------------------------------------------------
-    def _coarse(
-        self, ctx: ReferenceContext, warped: torch.Tensor, heads: slice, corr: torch.Tensor | None = None
-    ) -> torch.Tensor:
-        """(B*K, C, hp, wp) -> logits of ``heads`` (B*K, n, H, W) at input resolution."""
-        logits = self.segnet(ctx.terms, warped, ctx.grid, corr)[:, heads]
+    def _coarse(self, ctx: ReferenceContext, inputs: SegNetInputs, heads: slice) -> torch.Tensor:
+        """SegNet's inputs for B*K hypotheses -> logits of ``heads`` (B*K, n, H, W) at
+        input resolution."""
+        logits = self.segnet(ctx.terms, inputs.warped, ctx.grid, inputs.corr, inputs.column_warped)[:, heads]
         return F.interpolate(logits, size=ctx.image.shape[-2:], mode="bilinear", align_corners=False)
 
-    def correlation(
-        self, feat_ref: torch.Tensor, src: torch.Tensor, eta: torch.Tensor, warped: torch.Tensor, grid: PaddedGrid
-    ) -> torch.Tensor | None:
-        """The config's correlation volume (``model.correlation.scale_correlation``) for the
-        hypotheses eta (B, K), or None without one."""
+    def scale_inputs(
+        self, feat_ref: torch.Tensor, src: torch.Tensor, eta: torch.Tensor, grid: PaddedGrid
+    ) -> SegNetInputs:
+        """SegNet's inputs for the scale hypotheses eta (B, K): ``src`` warped about the
+        image centre, the config's correlation volume (``scale_correlation``) and ``src``
+        warped by columns (``column_warp``), each None where the config has none.
+        ``feat_ref``: the unpadded reference features (None without a volume)."""
         c = self.config
-        if not c.corr_groups:
-            return None
-        return scale_correlation(
-            feat_ref, src, eta, warped, grid, c.corr_groups, c.corr_log_step, c.corr_shift_px, c.corr_column
-        )
+        warped = scale_warp(src, eta, grid)
+        column_warped = column_warp(src, eta, grid) if c.column_input else None
+        corr = None
+        if c.corr_groups:
+            corr = scale_correlation(
+                feat_ref,
+                src,
+                eta,
+                warped,
+                grid,
+                c.corr_groups,
+                c.corr_log_step,
+                c.corr_shift_px,
+                c.corr_column,
+                column_warped,
+            )
+        return SegNetInputs(warped=warped, corr=corr, column_warped=column_warped)
 
     def classify_eta(self, ctx: ReferenceContext, feat_src: torch.Tensor, eta: torch.Tensor) -> torch.Tensor:
         """eta thresholds (B, K) -> refined logits of p(eta <= eta_i), (B, K, H, W).
@@ -150,9 +173,8 @@ class BinaryTTCNet(nn.Module):
             src = feat_src
             if per_threshold:
                 src = feat_src.unflatten(0, (b, k))[:, start : start + chunk].flatten(0, 1)
-            warped = scale_warp(src, part, ctx.grid)
-            corr = self.correlation(ctx.terms.feat, src, part, warped, ctx.grid)
-            coarse = self._coarse(ctx, warped, slice(HEAD_TTC, HEAD_TTC + 1), corr)
+            inputs = self.scale_inputs(ctx.terms.feat, src, part, ctx.grid)
+            coarse = self._coarse(ctx, inputs, slice(HEAD_TTC, HEAD_TTC + 1))
             coarse = coarse.view(b, part.shape[1], *coarse.shape[-2:])
             # the full-resolution refiner runs one threshold at a time: on a CPU a batch of
             # full-size maps falls out of cache and costs ~2x more per map (96x288, 2 cores)
@@ -162,7 +184,8 @@ class BinaryTTCNet(nn.Module):
     def classify_shift(self, ctx: ReferenceContext, feat_src: torch.Tensor, shift_px: torch.Tensor) -> torch.Tensor:
         """shifts (B, K, 2) [input px] -> logits of p(u > u_i), p(v > v_i), (B, K, 2, H, W)."""
         b, k, _ = shift_px.shape
-        coarse = self._coarse(ctx, shift_warp(feat_src, shift_px / FEATURE_STRIDE, ctx.grid), slice(HEAD_U, HEAD_V + 1))
+        warped = shift_warp(feat_src, shift_px / FEATURE_STRIDE, ctx.grid)
+        coarse = self._coarse(ctx, SegNetInputs(warped=warped), slice(HEAD_U, HEAD_V + 1))
         return coarse.reshape(b, k, 2, *coarse.shape[-2:])
 
     def continuous(self, ctx: ReferenceContext, feat_src: torch.Tensor) -> ContinuousOutput:

@@ -103,14 +103,16 @@ class GlobalContext(nn.Module):
         return x + self.expand(g)
 
 
-def _zero_start_convs(channels: int, first_out: int, last_out: int) -> tuple[nn.Module | None, nn.Module | None]:
-    """A 3x3 stride-2 conv (into the first encoder conv) and a 1x1 conv (into the finest
-    decoder conv) of ``channels`` input channels, without bias and zero at init, so that
-    adding them leaves a trained network unchanged; (None, None) for no channels."""
+def _zero_start_convs(
+    channels: int, first_out: int, last_out: int, last_kernel: int = 1
+) -> tuple[nn.Module | None, nn.Module | None]:
+    """A 3x3 stride-2 conv (into the first encoder conv) and a ``last_kernel`` conv (into
+    the finest decoder conv) of ``channels`` input channels, without bias and zero at init,
+    so that adding them leaves a trained network unchanged; (None, None) for no channels."""
     if not channels:
         return None, None
     first = conv(channels, first_out, stride=2, bias=False)
-    last = conv(channels, last_out, kernel=1, bias=False)
+    last = conv(channels, last_out, kernel=last_kernel, bias=False)
     for layer in (first, last):
         nn.init.zeros_(layer.weight)
     return first, last
@@ -130,6 +132,7 @@ class SegNet2D(nn.Module):
         corr_channels: int = 0,
         shift_channels: int = 0,
         column_channels: int = 0,
+        column_input: bool = False,
     ) -> None:
         super().__init__()
         e, d = enc_channels, dec_channels
@@ -177,6 +180,12 @@ class SegNet2D(nn.Module):
         self.column_first, self.column_last = _zero_start_convs(column_channels, e[0], d[-1])
         widths = (("corr", corr_channels), ("shift", shift_channels), ("column", column_channels))
         self.volume_parts = tuple((name, width) for name, width in widths if width)
+        # the source warped by columns (``model.warp.column_warp``), a second input beside
+        # the centre-warped one: its own convs into the same two places, zero at init
+        self.column_src_first, self.column_src_last = None, None
+        if column_input:
+            self.column_src_first, last = _zero_start_convs(feat_channels, e[0], d[-1], last_kernel=3)
+            self.column_src_last = last if full_res_skip else None
 
     def _volume_slices(self, corr: torch.Tensor):
         """(first conv, last conv, the part's channels of ``corr``) per part of the volume."""
@@ -213,9 +222,16 @@ class SegNet2D(nn.Module):
         return _pad_to(out, (grid.top - pt) // 2, (grid.left - pl) // 2, size_hw)
 
     def forward(
-        self, ref: ReferenceTerms, warped: torch.Tensor, grid: PaddedGrid, corr: torch.Tensor | None = None
+        self,
+        ref: ReferenceTerms,
+        warped: torch.Tensor,
+        grid: PaddedGrid,
+        corr: torch.Tensor | None = None,
+        column_warped: torch.Tensor | None = None,
     ) -> torch.Tensor:
         """warped (B*K, C, hp, wp) -> logits (B*K, 3, h, w), cropped to the unpadded map.
+        ``column_warped`` (B*K, C, hp, wp): the source warped by columns, read where the
+        config has the second input and the hypothesis is a scale (as ``corr``).
         ``corr`` (B*K, 3G, 6G or 9G, h, w): the correlation volume on the unpadded map, when the config
         has one and the hypothesis is a scale (the binary-flow heads run without it). It
         is zero in the padding, so its convs (no bias) run on the map alone and their
@@ -228,6 +244,8 @@ class SegNet2D(nn.Module):
         first = self.first_src(warped)
         if corr is not None:
             first = first + self._corr_first(corr, grid, first.shape[-2:])
+        if column_warped is not None:
+            first = first + self.column_src_first(column_warped)
         x = self.first_post(_broadcast_add(ref.first, first))
         skips = [self.first_conv2(x)]
         for block in self.down:
@@ -246,4 +264,6 @@ class SegNet2D(nn.Module):
             x = x + self._corr_last(corr, box, x.shape[-2:])
         if self.full_res_skip:
             x = _broadcast_add(box.cut(ref.skip), x + self.last_src(box.cut(warped)))
+            if column_warped is not None:
+                x = x + self.column_src_last(box.cut(column_warped))
         return box.inner(self.head(finest_extra(self.last_post(x))))
