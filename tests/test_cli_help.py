@@ -166,3 +166,16 @@ def test_bench_refuses_a_config_with_weights():
     with pytest.raises(CliError, match="--config 'tiny' with --weights"):
         bench_cmd.check_common(args)
     assert main(["bench", "--config", "tiny", "--weights", "w.pt"]) == 2
+
+
+def test_help_wraps_at_spaces_so_hyphenated_names_stay_whole():
+    """A model config or scenario name is never split at one of its hyphens."""
+    import re
+
+    split = [
+        (parser.prog, line)
+        for _, parser, action in ACTIONS
+        for line in _formatted(parser, action).splitlines()
+        if re.search(r"[a-z0-9]-$", line)
+    ]
+    assert not split, split

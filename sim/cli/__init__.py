@@ -13,6 +13,7 @@ import argparse
 import importlib
 import os
 import sys
+import textwrap
 
 # The simulator's numpy work is small; one BLAS thread keeps OpenBLAS's spinning workers
 # from contending with the estimator's torch threads (measured: +5 ms per call at K = 4 on
@@ -41,6 +42,28 @@ COMMANDS: dict[str, str] = {
 }
 
 
+class _HelpFormatter(argparse.HelpFormatter):
+    """Wraps option help at spaces only, so that a hyphenated name (a model config, a
+    scenario) stays whole on one line."""
+
+    def _split_lines(self, text: str, width: int) -> list[str]:
+        return textwrap.wrap(self._whitespace_matcher.sub(" ", text).strip(), width, break_on_hyphens=False)
+
+
+class _RawDescriptionHelpFormatter(argparse.RawDescriptionHelpFormatter, _HelpFormatter):
+    """``_HelpFormatter`` for a command whose description keeps its own line breaks."""
+
+
+def _wrap_at_spaces(parser: argparse.ArgumentParser) -> None:
+    """Give ``parser`` and every subcommand's parser the formatters above."""
+    raw = issubclass(parser.formatter_class, argparse.RawDescriptionHelpFormatter)
+    parser.formatter_class = _RawDescriptionHelpFormatter if raw else _HelpFormatter
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for sub in action.choices.values():
+                _wrap_at_spaces(sub)
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="bittc",
@@ -51,6 +74,7 @@ def build_parser() -> argparse.ArgumentParser:
         module = importlib.import_module(module_name)
         p = module.add_parser(sub)
         p.set_defaults(_run=module.run)
+    _wrap_at_spaces(parser)
     return parser
 
 
