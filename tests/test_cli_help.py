@@ -168,14 +168,24 @@ def test_bench_refuses_a_config_with_weights():
     assert main(["bench", "--config", "tiny", "--weights", "w.pt"]) == 2
 
 
-def test_help_wraps_at_spaces_so_hyphenated_names_stay_whole():
-    """A model config or scenario name is never split at one of its hyphens."""
+def test_help_wraps_at_spaces_so_hyphenated_names_stay_whole(monkeypatch):
+    """At 80 columns no option help, description or usage splits a name (a model config,
+    a scenario, a flag) at one of its hyphens."""
     import re
+
+    monkeypatch.setenv("COLUMNS", "80")
+
+    def parsers(parser):
+        yield parser
+        for action in parser._actions:
+            if isinstance(action, argparse._SubParsersAction):
+                for sub in action.choices.values():
+                    yield from parsers(sub)
 
     split = [
         (parser.prog, line)
-        for _, parser, action in ACTIONS
-        for line in _formatted(parser, action).splitlines()
-        if re.search(r"[a-z0-9]-$", line)
+        for parser in parsers(build_parser())
+        for line in parser.format_help().splitlines()
+        if re.search(r"[A-Za-z0-9]-$", line)
     ]
     assert not split, split

@@ -142,9 +142,12 @@ def _make_column_input_live(net):
 def test_init_grows_as_the_identity(tmp_path, source, grown, make_live):
     torch.manual_seed(0)
     plain = BinaryTTCNet(get_config(source)).eval()
-    if source == "cpu-small-corr":  # a trained volume: live, so the grown net must keep it
+    if source.startswith("cpu-small-corr"):  # a trained volume: live, so the grown net must keep it
         with torch.no_grad():
             _make_correlation_first_live(plain)
+            if get_config(source).corr_column:  # and its column correlations
+                _make_column_first_live(plain)
+                _make_column_last_live(plain)
     path = tmp_path / "plain.pt"
     save_checkpoint(path, make_payload(plain, source, {}))
     net = init_network(path, grown).eval()
@@ -237,8 +240,12 @@ def test_a_foreign_file_is_named_as_not_a_bittc_checkpoint_without_torch_advice(
 
 
 def test_a_config_stored_before_the_column_correlations_loads_without_them():
-    """A checkpoint written before ``corr_column`` existed stores no such key: it loads
-    with the column correlations off, the config it was trained as."""
+    """A checkpoint written before ``corr_column`` and ``column_input`` existed stores
+    neither key: it loads with both off, the config it was trained as; one written with
+    the column correlations but before the column input loads without the input."""
     stored = dataclasses.asdict(get_config("cpu-small-corr"))
     del stored["corr_column"], stored["column_input"]
     assert ModelConfig.from_dict(stored) == get_config("cpu-small-corr")
+    column = dataclasses.asdict(get_config("cpu-small-corr-column"))
+    del column["column_input"]
+    assert ModelConfig.from_dict(column) == get_config("cpu-small-corr-column")

@@ -10,7 +10,6 @@ from bittc_core.model.auc import auc_eta, uniform_levels
 from bittc_core.model.correlation import scale_correlation
 from bittc_core.model.network import CPU_INFERENCE_HYPOTHESES
 from bittc_core.model.segnet import _broadcast_add
-from bittc_core.model.warp import column_warp, scale_warp
 
 H, W = 48, 96
 
@@ -157,6 +156,9 @@ def test_growth_blocks_start_as_the_identity(field, base):
     if base:  # a trained volume: live, so the grown network must keep what it adds
         with torch.no_grad():
             small.segnet.corr_first.weight.normal_(0.0, 0.3)
+            if base.get("corr_column"):  # and its column correlations
+                small.segnet.column_first.weight.normal_(0.0, 0.3)
+                small.segnet.column_last.weight.normal_(0.0, 0.3)
     missing, unexpected = grown.load_state_dict(small.state_dict(), strict=False)
     added = (".extra", "dec_extra", ".corr_", ".shift_", ".column_")
     assert missing and not unexpected and all(any(a in k for a in added) for k in missing)
@@ -191,9 +193,9 @@ def test_correlation_groups_must_divide_the_features():
 
 
 def test_the_column_input_is_the_column_warp_read_through_its_own_convs():
-    """SegNet's second input is the source warped by columns; the volume's centre column
-    correlation reads it instead of warping again, with the same result; each of its two
-    convs (the finest one with ``full_res_skip``) reaches the logits."""
+    """The volume's centre column correlation reads SegNet's second input (the source
+    warped by columns) instead of warping again, with the same result; each of the input's
+    two convs (the finest one with ``full_res_skip``) reaches the logits."""
     torch.manual_seed(0)
     cfg = dataclasses.replace(CONFIGS["tiny"], corr_groups=2, corr_column=True, column_input=True)
     net = BinaryTTCNet(cfg).eval()
@@ -203,8 +205,6 @@ def test_the_column_input_is_the_column_warp_read_through_its_own_convs():
         feats = net.extract(torch.cat((prev, latest)))
         ctx = net.prepare_reference(feats[1:], latest)
         inputs = net.scale_inputs(ctx.terms.feat, feats[:1], eta, ctx.grid)
-        torch.testing.assert_close(inputs.column_warped, column_warp(feats[:1], eta, ctx.grid), rtol=0, atol=0)
-        torch.testing.assert_close(inputs.warped, scale_warp(feats[:1], eta, ctx.grid), rtol=0, atol=0)
         unshared = scale_correlation(
             ctx.terms.feat, feats[:1], eta, inputs.warped, ctx.grid, 2, cfg.corr_log_step, 0, True
         )
@@ -216,3 +216,8 @@ def test_the_column_input_is_the_column_warp_read_through_its_own_convs():
             assert not torch.allclose(net(prev, latest, eta), base), name
             layer.weight.zero_()
         torch.testing.assert_close(net(prev, latest, eta), base, rtol=0, atol=0)
+        # the flow heads read no column input; a network without it refuses one
+        assert net.classify_shift(ctx, feats[:1], torch.tensor([[[3.0, 0.0]]])).shape[:3] == (1, 1, 2)
+        plain = BinaryTTCNet(dataclasses.replace(cfg, column_input=False)).eval()
+        with pytest.raises(ValueError, match="column_warped given to a network without the column input"):
+            plain.segnet(ctx.terms, inputs.warped, ctx.grid, inputs.corr, inputs.column_warped)

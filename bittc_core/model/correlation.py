@@ -111,11 +111,11 @@ def scale_correlation(
 
     ``ref`` (B, C, h, w) are the unpadded reference features, ``warped`` is
     ``scale_warp(src, eta, grid)``, already computed for SegNet's input. The reference is
-    zero in the padding, so is the correlation there (``column_warped``, where given, is
-    ``column_warp(src, eta, grid)``, SegNet's second input, read in place of the centre
-    column warp): it is computed on the unpadded map
+    zero in the padding, so is the correlation there: it is computed on the unpadded map
     only (the outer warps too) and never padded; SegNet places what its convs make of it
-    (``SegNet2D.forward``)."""
+    (``SegNet2D.forward``). ``column_warped``, where given, is ``column_warp(src, eta,
+    grid)``, SegNet's second input: the centre column correlation reads it cropped
+    instead of warping again (the same samples)."""
     warps = [
         grid.crop(warped) if offset == 0.0 else scale_warp(src, eta * math.exp(offset * log_step), grid, unpadded=True)
         for offset in CORR_OFFSETS

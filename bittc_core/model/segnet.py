@@ -241,6 +241,8 @@ class SegNet2D(nn.Module):
         The finest level's convs only run on the crop plus a margin of 1 px per 3x3 conv:
         the result inside is exactly that of running them on the whole padded map (the
         margin covers their receptive field; beyond the padded map both see zeros)."""
+        if column_warped is not None and self.column_src_first is None:
+            raise ValueError("SegNet2D: column_warped given to a network without the column input (column_input=False)")
         first = self.first_src(warped)
         if corr is not None:
             first = first + self._corr_first(corr, grid, first.shape[-2:])

@@ -43,11 +43,15 @@ COMMANDS: dict[str, str] = {
 
 
 class _HelpFormatter(argparse.HelpFormatter):
-    """Wraps option help at spaces only, so that a hyphenated name (a model config, a
-    scenario) stays whole on one line."""
+    """Wraps help and descriptions at spaces only, so that a hyphenated name (a model
+    config, a scenario, a flag) stays whole on one line."""
 
     def _split_lines(self, text: str, width: int) -> list[str]:
         return textwrap.wrap(self._whitespace_matcher.sub(" ", text).strip(), width, break_on_hyphens=False)
+
+    def _fill_text(self, text: str, width: int, indent: str) -> str:
+        text = self._whitespace_matcher.sub(" ", text).strip()
+        return textwrap.fill(text, width, initial_indent=indent, subsequent_indent=indent, break_on_hyphens=False)
 
 
 class _RawDescriptionHelpFormatter(argparse.RawDescriptionHelpFormatter, _HelpFormatter):
@@ -55,9 +59,13 @@ class _RawDescriptionHelpFormatter(argparse.RawDescriptionHelpFormatter, _HelpFo
 
 
 def _wrap_at_spaces(parser: argparse.ArgumentParser) -> None:
-    """Give ``parser`` and every subcommand's parser the formatters above."""
-    raw = issubclass(parser.formatter_class, argparse.RawDescriptionHelpFormatter)
-    parser.formatter_class = _RawDescriptionHelpFormatter if raw else _HelpFormatter
+    """Give ``parser`` and every subcommand's parser the formatters above, in place of
+    argparse's two (any other formatter a command sets stays)."""
+    replace = {
+        argparse.HelpFormatter: _HelpFormatter,
+        argparse.RawDescriptionHelpFormatter: _RawDescriptionHelpFormatter,
+    }
+    parser.formatter_class = replace.get(parser.formatter_class, parser.formatter_class)
     for action in parser._actions:
         if isinstance(action, argparse._SubParsersAction):
             for sub in action.choices.values():
