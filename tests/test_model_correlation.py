@@ -8,7 +8,7 @@ import torch
 
 from bittc_core.model.config import ModelConfig
 from bittc_core.model.correlation import CORR_OFFSETS, group_correlation, scale_correlation, shifted_correlation
-from bittc_core.model.segnet import SegNet2D
+from bittc_core.model.segnet import SegNet2D, SegNetInputs
 from bittc_core.model.warp import PaddedGrid, column_warp, scale_warp
 
 
@@ -85,11 +85,11 @@ def test_segnet_places_its_correlation_convs_as_on_the_padded_volume(h, w):
         warped = scale_warp(src, eta, grid)
         corr = torch.randn(2, 6, h, w, generator=g)
         with torch.no_grad():
-            out = net(net.prepare(grid.pad(feat_ref), grid), warped, grid, corr)
-            expected = ref_net(ref_net.prepare(grid.pad(feat_ref), grid), warped, grid, corr)
+            out = net(net.prepare(grid.pad(feat_ref), grid), SegNetInputs(warped, corr), grid)
+            expected = ref_net(ref_net.prepare(grid.pad(feat_ref), grid), SegNetInputs(warped, corr), grid)
         assert out.shape == (2, 3, h, w)
         torch.testing.assert_close(out, expected)
-        assert not torch.allclose(out, net(net.prepare(grid.pad(feat_ref), grid), warped, grid, None))
+        assert not torch.allclose(out, net(net.prepare(grid.pad(feat_ref), grid), SegNetInputs(warped, None), grid))
 
 
 def test_outer_warps_tell_the_side_of_the_threshold():
@@ -241,10 +241,14 @@ def test_segnet_reads_each_part_of_the_volume_through_its_own_convs():
         other = corr.clone()
         other[:, 6 * i : 6 * i + 6] = torch.randn(2, 6, h, w, generator=g)
         with torch.no_grad():
-            assert not torch.allclose(net(terms, warped, grid, corr), net(terms, warped, grid, other))
+            assert not torch.allclose(
+                net(terms, SegNetInputs(warped, corr), grid), net(terms, SegNetInputs(warped, other), grid)
+            )
             live = [getattr(net, f"{part}_{end}").weight.clone() for end in ("first", "last")]
             getattr(net, f"{part}_first").weight.zero_()
             getattr(net, f"{part}_last").weight.zero_()
-            torch.testing.assert_close(net(terms, warped, grid, corr), net(terms, warped, grid, other))
+            torch.testing.assert_close(
+                net(terms, SegNetInputs(warped, corr), grid), net(terms, SegNetInputs(warped, other), grid)
+            )
             getattr(net, f"{part}_first").weight.copy_(live[0])
             getattr(net, f"{part}_last").weight.copy_(live[1])

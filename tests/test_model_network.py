@@ -220,4 +220,4 @@ def test_the_column_input_is_the_column_warp_read_through_its_own_convs():
         assert net.classify_shift(ctx, feats[:1], torch.tensor([[[3.0, 0.0]]])).shape[:3] == (1, 1, 2)
         plain = BinaryTTCNet(dataclasses.replace(cfg, column_input=False)).eval()
         with pytest.raises(ValueError, match="column_warped given to a network without the column input"):
-            plain.segnet(ctx.terms, inputs.warped, ctx.grid, inputs.corr, inputs.column_warped)
+            plain.segnet(ctx.terms, inputs, ctx.grid)

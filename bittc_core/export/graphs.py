@@ -72,7 +72,7 @@ class _Graph(nn.Module):
         terms, guide = self._terms(refs)
         v, k = eta.shape
         inputs = net.scale_inputs(terms.feat, feat_prev, eta, grid)
-        coarse = net.segnet(terms, inputs.warped, grid, inputs.corr, inputs.column_warped)[:, HEAD_TTC : HEAD_TTC + 1]
+        coarse = net.segnet(terms, inputs, grid)[:, HEAD_TTC : HEAD_TTC + 1]
         coarse = F.interpolate(coarse, size=self.size, mode="bilinear", align_corners=False)
         return net.refine(guide, coarse).view(v, k, *self.size)
 

@@ -30,7 +30,7 @@ from bittc_core.model.cont_refine import ContRefineNet
 from bittc_core.model.correlation import CORR_OFFSETS, scale_correlation
 from bittc_core.model.extractor import FeatExtractNet
 from bittc_core.model.refine import SegRefineNet
-from bittc_core.model.segnet import HEAD_TTC, HEAD_U, HEAD_V, ReferenceTerms, SegNet2D
+from bittc_core.model.segnet import HEAD_TTC, HEAD_U, HEAD_V, ReferenceTerms, SegNet2D, SegNetInputs
 from bittc_core.model.warp import PaddedGrid, column_warp, scale_warp, shift_warp
 
 FEATURE_STRIDE = 3  # [input px per feature px]
@@ -48,15 +48,6 @@ class ReferenceContext:
     grid: PaddedGrid
     terms: ReferenceTerms
     guide: torch.Tensor  # (B, refine_ch, H, W)
-
-
-@dataclass
-class SegNetInputs:
-    """What SegNet reads for B*K hypotheses (``SegNet2D.forward``)."""
-
-    warped: torch.Tensor  # (B*K, C, hp, wp) the source warped by the hypothesis
-    corr: torch.Tensor | None = None  # (B*K, n, h, w) the correlation volume, unpadded
-    column_warped: torch.Tensor | None = None  # (B*K, C, hp, wp) the source warped by columns
 
 
 @dataclass
@@ -125,7 +116,7 @@ class BinaryTTCNet(nn.Module):
     def _coarse(self, ctx: ReferenceContext, inputs: SegNetInputs, heads: slice) -> torch.Tensor:
         """SegNet's inputs for B*K hypotheses -> logits of ``heads`` (B*K, n, H, W) at
         input resolution."""
-        logits = self.segnet(ctx.terms, inputs.warped, ctx.grid, inputs.corr, inputs.column_warped)[:, heads]
+        logits = self.segnet(ctx.terms, inputs, ctx.grid)[:, heads]
         return F.interpolate(logits, size=ctx.image.shape[-2:], mode="bilinear", align_corners=False)
 
     def scale_inputs(

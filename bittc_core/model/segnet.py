@@ -45,6 +45,15 @@ class ReferenceTerms:
     feat: torch.Tensor | None  # the unpadded reference features, kept for the correlation
 
 
+@dataclass
+class SegNetInputs:
+    """What SegNet reads for B*K hypotheses (``SegNet2D.forward``)."""
+
+    warped: torch.Tensor  # (B*K, C, hp, wp) the source warped by the hypothesis
+    corr: torch.Tensor | None = None  # (B*K, n, h, w) the correlation volume, unpadded
+    column_warped: torch.Tensor | None = None  # (B*K, C, hp, wp) the source warped by columns
+
+
 @dataclass(frozen=True)
 class _MarginBox:
     """The unpadded map of a ``PaddedGrid`` grown by up to ``margin`` px a side."""
@@ -221,18 +230,11 @@ class SegNet2D(nn.Module):
         out = layer(F.pad(corr, (pl, 1, pt, 1)))
         return _pad_to(out, (grid.top - pt) // 2, (grid.left - pl) // 2, size_hw)
 
-    def forward(
-        self,
-        ref: ReferenceTerms,
-        warped: torch.Tensor,
-        grid: PaddedGrid,
-        corr: torch.Tensor | None = None,
-        column_warped: torch.Tensor | None = None,
-    ) -> torch.Tensor:
-        """warped (B*K, C, hp, wp) -> logits (B*K, 3, h, w), cropped to the unpadded map.
-        ``column_warped`` (B*K, C, hp, wp): the source warped by columns, read where the
+    def forward(self, ref: ReferenceTerms, inputs: SegNetInputs, grid: PaddedGrid) -> torch.Tensor:
+        """``inputs.warped`` (B*K, C, hp, wp) -> logits (B*K, 3, h, w), cropped to the unpadded map.
+        ``inputs.column_warped`` (B*K, C, hp, wp): the source warped by columns, read where the
         config has the second input and the hypothesis is a scale (as ``corr``).
-        ``corr`` (B*K, 3G, 6G or 9G, h, w): the correlation volume on the unpadded map, when the config
+        ``inputs.corr`` (B*K, 3G, 6G or 9G, h, w): the correlation volume on the unpadded map, when the config
         has one and the hypothesis is a scale (the binary-flow heads run without it). It
         is zero in the padding, so its convs (no bias) run on the map alone and their
         outputs are zero-padded into place (``_corr_first``, ``_corr_last``): their result on
@@ -241,6 +243,7 @@ class SegNet2D(nn.Module):
         The finest level's convs only run on the crop plus a margin of 1 px per 3x3 conv:
         the result inside is exactly that of running them on the whole padded map (the
         margin covers their receptive field; beyond the padded map both see zeros)."""
+        warped, corr, column_warped = inputs.warped, inputs.corr, inputs.column_warped
         if column_warped is not None and self.column_src_first is None:
             raise ValueError("SegNet2D: column_warped given to a network without the column input (column_input=False)")
         first = self.first_src(warped)
