@@ -27,6 +27,7 @@ def args(**kw):
         device="cpu",
         stage="binary",
         freeze_binary=False,
+        freeze_norm_stats=False,
         actor_weight=1.0,
         inpath_weight=1.0,
         vru_weight=1.0,
@@ -105,6 +106,7 @@ def test_config_yaml_records_each_stage_as_it_runs(tmp_path):
                 out=str(out),
                 stage="continuous",
                 freeze_binary=True,
+                freeze_norm_stats=True,
                 steps=2,
                 val_every=2,
                 val_limit=2,
@@ -117,3 +119,4 @@ def test_config_yaml_records_each_stage_as_it_runs(tmp_path):
     assert saved["stages"] == ["continuous"]
     cfg = saved["train_config"]["continuous"]
     assert cfg["stage"] == "continuous" and cfg["freeze_binary"] is True and cfg["actor_weight"] == 2.0
+    assert cfg["freeze_norm_stats"] is True

@@ -57,6 +57,23 @@ def test_frozen_continuous_stage_trains_the_continuous_refiner_only(tmp_path):
         TrainConfig(stage="binary", freeze_binary=True)
 
 
+@pytest.mark.parametrize("freeze", [False, True])
+def test_frozen_norm_statistics_stay_put_while_the_weights_learn(tmp_path, freeze):
+    tr = make_trainer(tmp_path, "binary", steps=3, freeze_norm_stats=freeze)
+    before = {k: v.clone() for k, v in tr.net.state_dict().items()}
+    stats = [k for k in before if k.endswith(("running_mean", "running_var"))]
+    assert stats
+    tr.run()
+    after = tr.net.state_dict()
+    moved = [k for k in stats if not torch.equal(after[k], before[k])]
+    binary = [k for k in stats if k.startswith(("features.", "segnet."))]  # what the binary stage runs
+    assert binary
+    assert (moved == []) if freeze else set(binary) <= set(moved), moved
+    # the norms' scale and shift learn either way
+    scales = [k[: -len("running_mean")] + "weight" for k in binary if k.endswith("running_mean")]
+    assert all(not torch.equal(after[k], before[k]) for k in scales)
+
+
 def test_train_config_refuses_a_negative_warmup():
     with pytest.raises(ValueError, match="warmup_steps=-1"):
         TrainConfig(warmup_steps=-1)

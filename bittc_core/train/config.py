@@ -53,6 +53,10 @@ class TrainConfig:
     # SegRefineNet) is frozen with its batch-norm statistics, so the geofences keep the
     # binary stage's accuracy (a small model fine-tuned end to end trades them for MiD)
     freeze_binary: bool = False
+    # keep every batch norm's running statistics as the start had them (their scale and shift
+    # still learn): a fine-tune on pairs of another interval (``frame_stride``) or scenes of
+    # another mix would otherwise move the statistics the whole network normalises by
+    freeze_norm_stats: bool = False
     # (parameter-name prefix, multiplier) pairs: those parameters learn at lr x multiplier
     # (``train.params.param_groups``), e.g. modules added by growth, which start at zero and
     # would otherwise stay small beside weights trained for thousands of steps

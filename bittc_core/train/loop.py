@@ -95,10 +95,16 @@ class Trainer:
         return [getattr(net, m) for m in BINARY_MODULES] if self.cfg.freeze_binary else []
 
     def _train_mode(self) -> None:
-        """Training mode, except frozen modules (their batch-norm statistics stay put)."""
+        """Training mode, except frozen modules (their batch-norm statistics stay put) and,
+        with ``freeze_norm_stats``, every batch norm (normalising by its running statistics,
+        which stay put; its scale and shift still learn)."""
         self.net.train()
         for module in self.frozen_modules():
             module.eval()
+        if self.cfg.freeze_norm_stats:
+            for module in self.net.modules():
+                if isinstance(module, torch.nn.modules.batchnorm._BatchNorm):
+                    module.eval()
 
     @property
     def criterion(self) -> str:

@@ -141,6 +141,12 @@ def _add_loss_flags(p: argparse.ArgumentParser) -> None:
         action="store_true",
         help="continuous stage: train the continuous refinement only, the binary network frozen",
     )
+    p.add_argument(
+        "--freeze-norm-stats",
+        action="store_true",
+        help="keep every batch norm's running statistics as --init had them (their scale and "
+        "shift still learn), e.g. for a fine-tune on pairs of another --frame-stride",
+    )
 
 
 def check_train_flags(args) -> None:

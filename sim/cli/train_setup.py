@@ -77,6 +77,7 @@ def stage_configs(args, net, stages, lr_mults, distill_weight) -> dict:
         inpath_threshold_share=args.inpath_thresholds,
         lr_mults=lr_mults,
         keep_checkpoints=args.keep_checkpoints,
+        freeze_norm_stats=args.freeze_norm_stats,
     )
     stage_cfgs = {
         stage: dataclasses.replace(base, stage=stage, freeze_binary=args.freeze_binary and stage == "continuous")
