@@ -113,17 +113,19 @@ class GlobalContext(nn.Module):
 
 
 def _zero_start_convs(
-    channels: int, first_out: int, last_out: int, last_kernel: int = 1
+    channels: int, first_out: int, last_out: int, last_kernel: int = 1, with_last: bool = True
 ) -> tuple[nn.Module | None, nn.Module | None]:
-    """A 3x3 stride-2 conv (into the first encoder conv) and a ``last_kernel`` conv (into
-    the finest decoder conv) of ``channels`` input channels, without bias and zero at init,
-    so that adding them leaves a trained network unchanged; (None, None) for no channels."""
+    """A 3x3 stride-2 conv (into the first encoder conv) and, ``with_last``, a ``last_kernel``
+    conv (into the finest decoder conv; else None) of ``channels`` input channels, without
+    bias and zero at init, so that adding them leaves a trained network unchanged; (None,
+    None) for no channels."""
     if not channels:
         return None, None
     first = conv(channels, first_out, stride=2, bias=False)
-    last = conv(channels, last_out, kernel=last_kernel, bias=False)
+    last = conv(channels, last_out, kernel=last_kernel, bias=False) if with_last else None
     for layer in (first, last):
-        nn.init.zeros_(layer.weight)
+        if layer is not None:
+            nn.init.zeros_(layer.weight)
     return first, last
 
 
@@ -193,8 +195,9 @@ class SegNet2D(nn.Module):
         # the centre-warped one: its own convs into the same two places, zero at init
         self.column_src_first, self.column_src_last = None, None
         if column_input:
-            self.column_src_first, last = _zero_start_convs(feat_channels, e[0], d[-1], last_kernel=3)
-            self.column_src_last = last if full_res_skip else None
+            self.column_src_first, self.column_src_last = _zero_start_convs(
+                feat_channels, e[0], d[-1], last_kernel=3, with_last=full_res_skip
+            )
 
     def _volume_slices(self, corr: torch.Tensor):
         """(first conv, last conv, the part's channels of ``corr``) per part of the volume."""
