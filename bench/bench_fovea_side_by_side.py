@@ -24,13 +24,12 @@ only their cost. Prints the medians and the ratios to the wide view alone.
 from __future__ import annotations
 
 import argparse
-import statistics
-import time
 
 import numpy as np
 import torch
 import torch.nn.functional as F
 
+from bittc_core.benchmark import interleaved_median_ms
 from bittc_core.estimator import make_estimator
 from bittc_core.model.segnet import ReferenceTerms, SegNetInputs
 from bittc_core.model.warp import PaddedGrid
@@ -99,23 +98,15 @@ def main() -> None:
             f = net.extract(x)
             net.classify_eta(net.prepare_reference(f, x), p, eta)
 
-    calls = {
-        "wide alone": lambda p: separate(p, 1),
-        "two passes": lambda p: separate(p, 2),
-        "side by side": lambda p: side_by_side(p, False),
-        "side by side, all four": lambda p: side_by_side(p, True),
-    }
-    times = {k: [] for k in calls}
     with torch.inference_mode():
         prev = [net.extract(image(w)) for w in (WIDE_W, FOVEA_W)]
-        for j in range(args.rounds + 3):
-            names = list(calls)
-            for name in names[j % len(names) :] + names[: j % len(names)]:
-                t0 = time.perf_counter()
-                calls[name](prev)
-                if j >= 3:
-                    times[name].append((time.perf_counter() - t0) * 1e3)
-    med = {k: statistics.median(v) for k, v in times.items()}
+        calls = {
+            "wide alone": lambda a, b: separate(prev, 1),
+            "two passes": lambda a, b: separate(prev, 2),
+            "side by side": lambda a, b: side_by_side(prev, False),
+            "side by side, all four": lambda a, b: side_by_side(prev, True),
+        }
+        med = interleaved_median_ms(calls, list(range(args.rounds + 4)), warmup=3)  # rounds by index
     print(f"96x288 wide, 96x144 fovea x4, K = 4, {args.threads} threads, {args.rounds} interleaved rounds")
     for k, v in med.items():
         print(f"  {k:<24} {v:7.2f} ms  {v / med['wide alone']:5.2f} x wide")
