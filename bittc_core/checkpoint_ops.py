@@ -17,6 +17,7 @@ All return a payload for :func:`bittc_core.checkpoint.save_checkpoint`; nothing 
 
 from __future__ import annotations
 
+import dataclasses
 import os
 
 import torch
@@ -36,10 +37,15 @@ def average_checkpoints(sources: list[str | os.PathLike]) -> dict:
     """The mean of ``sources`` (two or more checkpoints of one config) as a payload."""
     if len(sources) < 2:
         raise CheckpointError(f"averaging needs two or more checkpoints, got {len(sources)}")
-    ckpts = [release_payload(load_checkpoint(src, map_location="cpu")) for src in sources]
+    loaded = [load_checkpoint(src, map_location="cpu") for src in sources]
+    # configs compared as loaded: a file saved before a config field existed stores none of
+    # it and loads with its default (the shipped weights beside a fine-tune of them)
+    configs = [ckpt["model_config"] for ckpt in loaded]
+    ckpts = [release_payload(ckpt) for ckpt in loaded]
     first = ckpts[0]
-    for src, ckpt in zip(sources[1:], ckpts[1:]):
-        if ckpt["config"] != first["config"] or ckpt["state_dict"].keys() != first["state_dict"].keys():
+    first["config"] = dataclasses.asdict(configs[0])
+    for src, ckpt, config in zip(sources[1:], ckpts[1:], configs[1:]):
+        if config != configs[0] or ckpt["state_dict"].keys() != first["state_dict"].keys():
             raise CheckpointError(
                 f"checkpoint {str(src)!r} ({ckpt['config_name']!r}) does not match {str(sources[0])!r} "
                 f"({first['config_name']!r}): only checkpoints of one config can be averaged"

@@ -37,6 +37,19 @@ def test_the_mean_of_two_checkpoints(tmp_path):
     BinaryTTCNet(get_config("tiny")).load_state_dict(mean["state_dict"])
 
 
+def test_a_checkpoint_saved_before_a_config_field_existed_averages_with_a_newer_one(tmp_path):
+    a, sa = saved(tmp_path / "a.pt", "cpu-small-corr", 0)
+    b, sb = saved(tmp_path / "b.pt", "cpu-small-corr", 1)
+    old = torch.load(a, weights_only=True)
+    for field in ("corr_column", "column_input"):  # growth fields added later, at their defaults
+        del old["config"][field]
+    torch.save(old, a)
+    mean = average_checkpoints([a, b])
+    assert mean["config"] == load_checkpoint(b)["config"]  # the full config, as loaded
+    key = "segnet.first_ref.weight"
+    torch.testing.assert_close(mean["state_dict"][key], 0.5 * (sa[key] + sb[key]))
+
+
 def test_checkpoints_of_different_configs_are_refused(tmp_path):
     a, _ = saved(tmp_path / "a.pt", "tiny", 0)
     b, _ = saved(tmp_path / "b.pt", "cpu-small", 1)
