@@ -61,6 +61,7 @@ def add_train_flags(p: argparse.ArgumentParser) -> None:
         "--stage", default="binary", choices=STAGE_CHOICES, help="flow, binary, continuous or all (default binary)"
     )
     _add_loss_flags(p)
+    _add_what_learns_flags(p)
 
 
 def _add_loss_flags(p: argparse.ArgumentParser) -> None:
@@ -127,6 +128,10 @@ def _add_loss_flags(p: argparse.ArgumentParser) -> None:
         default=None,
         help="with --teacher: weight of the distillation BCE beside the ground-truth BCE (default 1)",
     )
+
+
+def _add_what_learns_flags(p: argparse.ArgumentParser) -> None:
+    """Which parameters learn, at what rate, and whether the batch norms' statistics move."""
     p.add_argument(
         "--lr-mult",
         action="append",
