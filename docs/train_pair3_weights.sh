@@ -29,4 +29,4 @@ mkdir -p "$OUT"
 source "$(dirname "$0")/release_steps.sh"
 # TEACHER=FILE: also learn that checkpoint's flip-averaged maps (--teacher, weight DISTILL_WEIGHT, default 1)
 finetune_release "$DATA11" "$OUT" "$RELEASE" 90 --vru-weight 6 ${TEACHER:+--teacher "$TEACHER" --distill-weight "${DISTILL_WEIGHT:-1}"} \
-    ${FREEZE_NORM_STATS:+--freeze-norm-stats}
+    $([ "${FREEZE_NORM_STATS:-0}" = 1 ] && echo --freeze-norm-stats)

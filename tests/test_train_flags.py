@@ -64,6 +64,7 @@ def args(**kw):
         (dict(near_outside_weight=-1.0), "--near-outside-weight -1.0"),
         (dict(lovasz_weight=-1.0), "--lovasz-weight -1.0"),
         (dict(freeze_binary=True), "--freeze-binary applies to the continuous stage, not --stage 'binary'"),
+        (dict(freeze_norm_stats=True), "--freeze-norm-stats needs --init"),
         (dict(teacher="missing.pt"), "--teacher 'missing.pt': no such file"),
         (
             dict(teacher="missing.pt", stage="continuous"),
@@ -106,7 +107,6 @@ def test_config_yaml_records_each_stage_as_it_runs(tmp_path):
                 out=str(out),
                 stage="continuous",
                 freeze_binary=True,
-                freeze_norm_stats=True,
                 steps=2,
                 val_every=2,
                 val_limit=2,
@@ -119,4 +119,27 @@ def test_config_yaml_records_each_stage_as_it_runs(tmp_path):
     assert saved["stages"] == ["continuous"]
     cfg = saved["train_config"]["continuous"]
     assert cfg["stage"] == "continuous" and cfg["freeze_binary"] is True and cfg["actor_weight"] == 2.0
-    assert cfg["freeze_norm_stats"] is True
+    assert cfg["freeze_norm_stats"] is False
+
+
+def test_freeze_norm_stats_runs_from_init_and_keeps_its_statistics(tmp_path):
+    import torch
+
+    from bittc_core.checkpoint import load_checkpoint, make_payload, save_checkpoint
+    from bittc_core.model import BinaryTTCNet, get_config
+    from sim.cli import main
+
+    torch.manual_seed(0)
+    start = BinaryTTCNet(get_config("tiny"))
+    for m in start.modules():  # trained-looking statistics, not the fresh 0 / 1
+        if isinstance(m, torch.nn.BatchNorm2d):
+            m.running_mean.uniform_(-1, 1)
+    save_checkpoint(tmp_path / "start.pt", make_payload(start, "tiny", {}))
+    out = tmp_path / "m.pt"
+    flags = ["--data", "synthetic", "--config", "tiny", "--steps", "2", "--batch-size", "2", "--val-every", "1"]
+    flags += ["--val-limit", "2", "--warmup-steps", "1", "--init", str(tmp_path / "start.pt"), "--out", str(out)]
+    assert main(["train", *flags, "--freeze-norm-stats"]) == 0
+    after = load_checkpoint(out)["state_dict"]
+    for key, value in start.state_dict().items():
+        if key.endswith(("running_mean", "running_var")):
+            assert torch.equal(after[key], value), key

@@ -59,7 +59,8 @@ def test_frozen_continuous_stage_trains_the_continuous_refiner_only(tmp_path):
 
 @pytest.mark.parametrize("freeze", [False, True])
 def test_frozen_norm_statistics_stay_put_while_the_weights_learn(tmp_path, freeze):
-    tr = make_trainer(tmp_path, "binary", steps=3, freeze_norm_stats=freeze)
+    # a validation after every step: training mode must come back without the statistics' updates
+    tr = make_trainer(tmp_path, "binary", steps=3, val_every=1, freeze_norm_stats=freeze)
     before = {k: v.clone() for k, v in tr.net.state_dict().items()}
     stats = [k for k in before if k.endswith(("running_mean", "running_var"))]
     assert stats

@@ -17,9 +17,8 @@ def make_trainer(
     tmp_path, stage: str = "binary", steps: int = 30, *, net_seed: int = 0, teacher: BinaryTTCNet | None = None, **kw
 ) -> Trainer:
     """A trainer of a ``tiny`` network (weights drawn with ``net_seed``) on 16 synthetic pairs."""
-    cfg = TrainConfig(
-        stage=stage, steps=steps, batch_size=4, lr=3e-3, warmup_steps=3, val_every=steps, val_limit=4, log_every=5, **kw
-    )
+    kw.setdefault("val_every", steps)
+    cfg = TrainConfig(stage=stage, steps=steps, batch_size=4, lr=3e-3, warmup_steps=3, val_limit=4, log_every=5, **kw)
     torch.manual_seed(net_seed)
     net = BinaryTTCNet(get_config("tiny"))
     return Trainer(

@@ -196,6 +196,10 @@ def check_train_flags(args) -> None:
             f"--inpath-thresholds {args.inpath_thresholds}: must be in [0, 1 - --pixel-thresholds "
             f"= {1 - args.pixel_thresholds:g}]"
         )
+    if args.freeze_norm_stats and args.init is None and not args.resume:
+        raise CliError("--freeze-norm-stats needs --init: it keeps the statistics of trained weights")
+    if args.freeze_norm_stats and CONFIGS[args.config].norm != "batch":
+        raise CliError(f"--freeze-norm-stats: config {args.config!r} has no batch norm")
     if args.freeze_binary and args.stage not in ("continuous", "all"):
         raise CliError(f"--freeze-binary applies to the continuous stage, not --stage {args.stage!r}")
     if args.teacher is not None:
