@@ -6,7 +6,7 @@ import argparse
 import pytest
 
 from bittc_core.errors import CliError, ConfigError
-from sim.cli import build_parser, main
+from sim.cli import all_parsers, build_parser, main
 from sim.cli.common import MAX_SEED, TTA_MODES, check_seed, flag_error
 
 
@@ -174,17 +174,9 @@ def test_help_wraps_at_spaces_so_hyphenated_names_stay_whole(monkeypatch):
     import re
 
     monkeypatch.setenv("COLUMNS", "80")
-
-    def parsers(parser):
-        yield parser
-        for action in parser._actions:
-            if isinstance(action, argparse._SubParsersAction):
-                for sub in action.choices.values():
-                    yield from parsers(sub)
-
     split = [
         (parser.prog, line)
-        for parser in parsers(build_parser())
+        for parser in all_parsers(build_parser())
         for line in parser.format_help().splitlines()
         if re.search(r"[A-Za-z0-9]-$", line)
     ]

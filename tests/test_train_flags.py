@@ -125,21 +125,16 @@ def test_config_yaml_records_each_stage_as_it_runs(tmp_path):
 def test_freeze_norm_stats_runs_from_init_and_keeps_its_statistics(tmp_path):
     import torch
 
-    from bittc_core.checkpoint import load_checkpoint, make_payload, save_checkpoint
-    from bittc_core.model import BinaryTTCNet, get_config
+    from bittc_core.checkpoint import load_checkpoint
     from sim.cli import main
+    from tests.train_helpers import saved_checkpoint
 
-    torch.manual_seed(0)
-    start = BinaryTTCNet(get_config("tiny"))
-    for m in start.modules():  # trained-looking statistics, not the fresh 0 / 1
-        if isinstance(m, torch.nn.BatchNorm2d):
-            m.running_mean.uniform_(-1, 1)
-    save_checkpoint(tmp_path / "start.pt", make_payload(start, "tiny", {}))
+    start, start_state = saved_checkpoint(tmp_path / "start.pt", "tiny", 0)
     out = tmp_path / "m.pt"
     flags = ["--data", "synthetic", "--config", "tiny", "--steps", "2", "--batch-size", "2", "--val-every", "1"]
-    flags += ["--val-limit", "2", "--warmup-steps", "1", "--init", str(tmp_path / "start.pt"), "--out", str(out)]
+    flags += ["--val-limit", "2", "--warmup-steps", "1", "--init", start, "--out", str(out)]
     assert main(["train", *flags, "--freeze-norm-stats"]) == 0
     after = load_checkpoint(out)["state_dict"]
-    for key, value in start.state_dict().items():
+    for key, value in start_state.items():
         if key.endswith(("running_mean", "running_var")):
             assert torch.equal(after[key], value), key

@@ -4,27 +4,16 @@ and the grown copy the weight recipes train from (``checkpoint_ops.grown_payload
 import pytest
 import torch
 
-from bittc_core.checkpoint import CheckpointError, load_checkpoint, make_payload, save_checkpoint
+from bittc_core.checkpoint import CheckpointError, load_checkpoint, save_checkpoint
 from bittc_core.checkpoint_ops import average_checkpoints, grown_payload, zero_layers
 from bittc_core.model import BinaryTTCNet, get_config
 from sim.cli import main
-
-
-def saved(path, name, seed):
-    torch.manual_seed(seed)
-    net = BinaryTTCNet(get_config(name))
-    for m in net.modules():  # distinct batch-norm statistics too
-        if isinstance(m, torch.nn.BatchNorm2d):
-            m.running_mean.uniform_(-1, 1)
-            m.num_batches_tracked.fill_(seed + 1)
-    torch.nn.init.uniform_(net.cont_refine.out.weight, -0.1, 0.1)  # starts at zero: give it weights to zero
-    save_checkpoint(path, make_payload(net, name, {"seed": seed}))
-    return str(path), net.state_dict()
+from tests.train_helpers import saved_checkpoint
 
 
 def test_the_mean_of_two_checkpoints(tmp_path):
-    a, sa = saved(tmp_path / "a.pt", "tiny", 0)
-    b, sb = saved(tmp_path / "b.pt", "tiny", 1)
+    a, sa = saved_checkpoint(tmp_path / "a.pt", "tiny", 0)
+    b, sb = saved_checkpoint(tmp_path / "b.pt", "tiny", 1)
     assert main(["weights", "average", a, b, "--out", str(tmp_path / "mean.pt")]) == 0
     mean = load_checkpoint(tmp_path / "mean.pt", expected_config="tiny")
     for key, value in mean["state_dict"].items():
@@ -38,8 +27,8 @@ def test_the_mean_of_two_checkpoints(tmp_path):
 
 
 def test_a_checkpoint_saved_before_a_config_field_existed_averages_with_a_newer_one(tmp_path):
-    a, sa = saved(tmp_path / "a.pt", "cpu-small-corr", 0)
-    b, sb = saved(tmp_path / "b.pt", "cpu-small-corr", 1)
+    a, sa = saved_checkpoint(tmp_path / "a.pt", "cpu-small-corr", 0)
+    b, sb = saved_checkpoint(tmp_path / "b.pt", "cpu-small-corr", 1)
     old = torch.load(a, weights_only=True)
     for field in ("corr_column", "column_input"):  # growth fields added later, at their defaults
         del old["config"][field]
@@ -51,8 +40,8 @@ def test_a_checkpoint_saved_before_a_config_field_existed_averages_with_a_newer_
 
 
 def test_checkpoints_of_different_configs_are_refused(tmp_path):
-    a, _ = saved(tmp_path / "a.pt", "tiny", 0)
-    b, _ = saved(tmp_path / "b.pt", "cpu-small", 1)
+    a, _ = saved_checkpoint(tmp_path / "a.pt", "tiny", 0)
+    b, _ = saved_checkpoint(tmp_path / "b.pt", "cpu-small", 1)
     with pytest.raises(CheckpointError, match="only checkpoints of one config can be averaged"):
         average_checkpoints([a, b])
     assert main(["weights", "average", a, b, "--out", str(tmp_path / "mean.pt")]) == 2
@@ -60,10 +49,10 @@ def test_checkpoints_of_different_configs_are_refused(tmp_path):
 
 
 def test_one_checkpoint_or_a_source_as_output_is_refused(tmp_path, capsys):
-    a, _ = saved(tmp_path / "a.pt", "tiny", 0)
+    a, _ = saved_checkpoint(tmp_path / "a.pt", "tiny", 0)
     assert main(["weights", "average", a, "--out", str(tmp_path / "mean.pt")]) == 2
     assert "two or more" in capsys.readouterr().err
-    b, _ = saved(tmp_path / "b.pt", "tiny", 1)
+    b, _ = saved_checkpoint(tmp_path / "b.pt", "tiny", 1)
     before = (tmp_path / "a.pt").read_bytes()
     assert main(["weights", "average", a, b, "--out", a]) == 2
     assert "is one of the sources" in capsys.readouterr().err
@@ -72,7 +61,7 @@ def test_one_checkpoint_or_a_source_as_output_is_refused(tmp_path, capsys):
 
 
 def test_zeroing_the_refinement_leaves_the_rest(tmp_path):
-    a, sa = saved(tmp_path / "a.pt", "tiny", 0)
+    a, sa = saved_checkpoint(tmp_path / "a.pt", "tiny", 0)
     assert sa["cont_refine.out.weight"].any()
     out = tmp_path / "auc_only.pt"
     assert main(["weights", "zero", a, "--layers", "cont_refine.out", "--out", str(out)]) == 0
@@ -85,7 +74,7 @@ def test_zeroing_the_refinement_leaves_the_rest(tmp_path):
 
 
 def test_zeroing_an_unknown_layer_names_it_and_writes_nothing(tmp_path, capsys):
-    a, _ = saved(tmp_path / "a.pt", "tiny", 0)
+    a, _ = saved_checkpoint(tmp_path / "a.pt", "tiny", 0)
     with pytest.raises(CheckpointError, match="no layer 'segnet.nope'"):
         zero_layers(a, ["cont_refine.out", "segnet.nope"])
     assert main(["weights", "zero", a, "--layers", "segnet.nope", "--out", str(tmp_path / "z.pt")]) == 2
@@ -96,7 +85,7 @@ def test_zeroing_an_unknown_layer_names_it_and_writes_nothing(tmp_path, capsys):
 def test_a_grown_copy_keeps_the_weights_and_adds_the_column_convs(tmp_path):
     """The grown payload is the checkpoint in the larger config: every weight it had,
     the added convs at zero, and a note of where it came from."""
-    src, state = saved(tmp_path / "corr.pt", "cpu-small-corr", 0)
+    src, state = saved_checkpoint(tmp_path / "corr.pt", "cpu-small-corr", 0)
     payload = grown_payload(src, "cpu-small-corr-column")
     assert payload["config_name"] == "cpu-small-corr-column" and payload["train_meta"] == {"grown_from": src}
     grown = payload["state_dict"]

@@ -6,11 +6,27 @@ import argparse
 
 import torch
 
+from bittc_core.checkpoint import make_payload, save_checkpoint
 from bittc_core.data.synthetic import SyntheticConfig, SyntheticPairs
 from bittc_core.model import BinaryTTCNet, get_config
 from bittc_core.train import RunPaths, TrainConfig, Trainer
 
 SMALL = SyntheticConfig(height_px=48, width_px=96, patch_half_size_px=(6.0, 20.0), max_translation_px=6.0)
+
+
+def saved_checkpoint(path, name: str, seed: int) -> tuple[str, dict]:
+    """A checkpoint of config ``name`` at ``path``, weights drawn with ``seed``, with
+    trained-looking batch-norm statistics (not the fresh 0 / 1, distinct per seed) and
+    ContRefineNet's last layer (zero at init) given weights -> (its path, its state dict)."""
+    torch.manual_seed(seed)
+    net = BinaryTTCNet(get_config(name))
+    for m in net.modules():
+        if isinstance(m, torch.nn.BatchNorm2d):
+            m.running_mean.uniform_(-1, 1)
+            m.num_batches_tracked.fill_(seed + 1)
+    torch.nn.init.uniform_(net.cont_refine.out.weight, -0.1, 0.1)
+    save_checkpoint(path, make_payload(net, name, {"seed": seed}))
+    return str(path), net.state_dict()
 
 
 def make_trainer(

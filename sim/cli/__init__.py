@@ -58,6 +58,15 @@ class _RawDescriptionHelpFormatter(argparse.RawDescriptionHelpFormatter, _HelpFo
     """``_HelpFormatter`` for a command whose description keeps its own line breaks."""
 
 
+def all_parsers(parser: argparse.ArgumentParser):
+    """``parser``, then every subcommand's parser, depth first."""
+    yield parser
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for sub in action.choices.values():
+                yield from all_parsers(sub)
+
+
 def _wrap_at_spaces(parser: argparse.ArgumentParser) -> None:
     """Give ``parser`` and every subcommand's parser the formatters above, in place of
     argparse's two (any other formatter a command sets stays)."""
@@ -65,11 +74,8 @@ def _wrap_at_spaces(parser: argparse.ArgumentParser) -> None:
         argparse.HelpFormatter: _HelpFormatter,
         argparse.RawDescriptionHelpFormatter: _RawDescriptionHelpFormatter,
     }
-    parser.formatter_class = replace.get(parser.formatter_class, parser.formatter_class)
-    for action in parser._actions:
-        if isinstance(action, argparse._SubParsersAction):
-            for sub in action.choices.values():
-                _wrap_at_spaces(sub)
+    for p in all_parsers(parser):
+        p.formatter_class = replace.get(p.formatter_class, p.formatter_class)
 
 
 def build_parser() -> argparse.ArgumentParser:
