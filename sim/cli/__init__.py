@@ -39,6 +39,7 @@ COMMANDS: dict[str, str] = {
     "sweep": "sim.cli.sweep_cmd",
     "demo": "sim.cli.demo_cmd",
     "weights": "sim.cli.weights_cmd",
+    "compare": "sim.cli.compare_cmd",
 }
 
 
