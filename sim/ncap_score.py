@@ -19,6 +19,10 @@ from controllers.stages import MAX_DECEL_MPS2
 from scenarios.spec import ScenarioCase
 from sim.camera import CameraConfig
 
+#: [s] a first warning at an exact TTC at least this early passes: the criterion of NHTSA's
+#: FCW confirmation test for a stopped lead, reported beside Euro NCAP's figures
+FCW_TTC_S = 2.1
+
 
 @lru_cache(maxsize=512)
 def unavoidable_reason(case: ScenarioCase) -> str | None:

@@ -8,7 +8,7 @@ import pytest
 
 from bittc_core.errors import ConfigError
 from sim.cli import main
-from sim.compare import compare, load_runs
+from sim.compare import compare, format_comparison, load_runs
 from sim.run_summary import SUMMARY_KEYS
 
 
@@ -44,51 +44,79 @@ BASE = [
 ]
 
 
+def sets(tmp_path, new, base=BASE):
+    return load_runs([write_set(tmp_path / "a", base)]), load_runs([write_set(tmp_path / "b", new)])
+
+
 def test_the_summary_keys_it_reads_are_those_a_run_writes():
-    for key in ("scenario", "family", "seed", "threat", "collision", "impact_speed_kph", "false_alarm", "points"):
+    for key in summary("x", "x"):
         assert key in SUMMARY_KEYS
 
 
 def test_the_same_runs_compare_equal(tmp_path, capsys):
     a = write_set(tmp_path / "a", BASE)
     assert main(["compare", "--base", a, "--new", a, "--fail-on-worse"]) == 0
-    out = capsys.readouterr().out
-    assert "nothing got worse (2 threats and 1 benign run compared)" in out
+    assert "nothing got worse (2 threats and 1 benign run compared)" in capsys.readouterr().out
 
 
-@pytest.mark.parametrize(
-    "change, worse",
-    [
-        ({"collision": True, "impact_speed_kph": 10.0}, ["hit", "impact"]),  # avoided -> hit
-        ({"ttc_at_first_warning_s": 1.9}, ["first warning at TTC 2.50 s -> 1.90 s"]),
-    ],
-)
-def test_a_threat_that_got_worse_fails_the_gate(tmp_path, capsys, change, worse):
-    new = [summary("CCRs-50", "CCRs", **change), *BASE[1:]]
+def test_a_case_that_is_hit_now_fails_the_gate(tmp_path, capsys):
+    new = [summary("CCRs-50", "CCRs", collision=True, impact_speed_kph=10.0), *BASE[1:]]
     a, b = write_set(tmp_path / "a", BASE), write_set(tmp_path / "b", new)
     assert main(["compare", "--base", a, "--new", b]) == 0  # a report, not a gate, without the flag
-    assert main(["compare", "--base", a, "--new", b, "--fail-on-worse", "--out", str(tmp_path / "c.json")]) == 1
-    c = json.loads((tmp_path / "c.json").read_text())
-    assert list(c["worse"]) == ["CCRs-50"] and c["better"] == {}
-    assert all(any(w in got for got in c["worse"]["CCRs-50"]) for w in worse[:1])
-    assert "CCRs: " + ("avoided" if "collision" in change else "fcw") in c["worse_figures"]
-    assert "all: " + ("avoided" if "collision" in change else "fcw") in c["worse_figures"]
+    out = tmp_path / "c.json"
+    assert main(["compare", "--base", a, "--new", b, "--fail-on-worse", "--out", str(out), "--markdown"]) == 1
+    text = capsys.readouterr().out
+    assert "| CCRs | 1/1 -> 0/1 (worse) | - | 1/1 | 1 -> 0.8 (worse) | 0 -> 10 (worse) |" in text
+    assert "1 case and 3 family figures got worse" in text
+    c = json.loads(out.read_text())
+    assert c["passed"] is False and c["worse"] == {"CCRs-50": ["hit"]} and c["better"] == {}
+    assert c["worse_figures"] == [f"{fam}: {f}" for fam in ("CCRs", "all") for f in ("avoided", "points", "impact_kph")]
 
 
-def test_impact_speeds_within_the_tolerance_are_the_same(tmp_path):
-    for impact, worse in ((19.1, False), (19.3, True), (18.0, False)):
+def test_a_first_warning_that_comes_later_than_2_1_s_is_worse_and_one_sooner_better(tmp_path):
+    late = [summary("CCRs-50", "CCRs", ttc_at_first_warning_s=2.0996), *BASE[1:]]
+    c = compare(*sets(tmp_path, late))
+    assert c.worse == {"CCRs-50": ["first warning at TTC 2.5 s -> 2.0996 s (>= 2.1 s passes)"]}
+    assert c.worse_figures == ["CCRs: fcw", "all: fcw"]
+    assert compare(*reversed(sets(tmp_path, late))).better == {
+        "CCRs-50": [c.worse["CCRs-50"][0].replace("2.5 s -> 2.0996 s", "2.0996 s -> 2.5 s")]
+    }
+
+
+def test_impact_speeds_within_the_tolerance_change_no_verdict(tmp_path, capsys):
+    for impact, verdict in ((19.1, None), (19.3, "worse"), (18.0, "better")):
         new = [BASE[0], summary("CCRb-12m-6mps2", "CCRb", collision=True, impact_speed_kph=impact), BASE[2]]
-        c = compare(load_runs([write_set(tmp_path / "a", BASE)]), load_runs([write_set(tmp_path / "b", new)]))
-        assert ("CCRb-12m-6mps2" in c.worse) == worse
-        assert ("CCRb-12m-6mps2" in c.better) == (impact < 18.2)
+        c = compare(*sets(tmp_path, new))
+        assert ("CCRb-12m-6mps2" in c.worse) == (verdict == "worse")
+        assert ("CCRb-12m-6mps2" in c.better) == (verdict == "better")
+        assert c.worse_figures == (
+            ["CCRb: points", "CCRb: impact_kph", "all: points", "all: impact_kph"] if verdict == "worse" else []
+        )
+        assert c.passed == (verdict != "worse")
+    a, b = str(tmp_path / "a"), str(tmp_path / "b")  # the last sets: 18.7 -> 18.0 km/h
+    assert main(["compare", "--base", b, "--new", a, "--tol-kph", "0.5", "--fail-on-worse"]) == 1  # 0.7 km/h harder
+    assert "impact 18.0 -> 18.7 km/h" in capsys.readouterr().out
+    assert main(["compare", "--base", b, "--new", a, "--tol-kph", "1", "--fail-on-worse"]) == 0
+    assert "18 -> 18.7 (within tolerance)" in capsys.readouterr().out
 
 
-def test_false_alarms_come_and_go(tmp_path):
+def test_false_alarms_come_and_go_and_a_benign_collision_is_worse(tmp_path):
     noisy = [*BASE[:2], summary("benign-oncoming", "benign-oncoming", threat=False, false_alarm=True)]
-    a, b = load_runs([write_set(tmp_path / "a", BASE)]), load_runs([write_set(tmp_path / "b", noisy)])
+    a, b = sets(tmp_path, noisy)
     assert compare(a, b).worse == {"benign-oncoming": ["false alarm"]}
     assert compare(b, a).better == {"benign-oncoming": ["quiet"]}
     assert compare(a, b).worse_figures == ["benign-oncoming: false_alarms", "all: false_alarms"]
+    crash = [*BASE[:2], summary("benign-oncoming", "benign-oncoming", threat=False, collision=True)]
+    assert compare(*sets(tmp_path, crash)).worse == {"benign-oncoming": ["hit"]}
+
+
+def test_a_case_missing_from_the_new_set_fails_the_gate(tmp_path, capsys):
+    a, b = write_set(tmp_path / "a", BASE), write_set(tmp_path / "b", BASE[:2])
+    assert main(["compare", "--base", a, "--new", b, "--fail-on-worse"]) == 1
+    out = capsys.readouterr().out
+    assert "missing from the new set (1): benign-oncoming" in out
+    assert "nothing got worse; 1 of the base set's cases are missing from the new set" in out
+    assert main(["compare", "--base", b, "--new", a, "--fail-on-worse"]) == 0  # a case added is no loss
 
 
 def test_sets_of_several_folders_match_by_case_and_seed(tmp_path):
@@ -100,6 +128,7 @@ def test_sets_of_several_folders_match_by_case_and_seed(tmp_path):
     c = compare(a, load_runs([write_set(tmp_path / "b", BASE)]))
     assert c.only_base == ["CCRs-50 (seed 2)"] and c.only_new == ["CCRs-50"]
     assert c.families[-1]["base"]["threats"] == 1
+    assert "only in the new set (1): CCRs-50" in format_comparison(c)
 
 
 def test_a_real_run_folder_compares_with_itself(tmp_path, capsys):
@@ -115,26 +144,58 @@ def test_a_real_run_folder_compares_with_itself(tmp_path, capsys):
     [
         (None, "no summary.json"),
         ([summary("CCRs-30", "CCRs")], "share no (case, seed)"),
-        ([BASE[0], BASE[0]], "appears twice in one set"),
-        ([summary("CCRs-50", "CCRs", threat=False)], "a threat in one set and benign in the other"),
+        ([BASE[0], BASE[0]], "is twice in"),
+        ([summary("CCRs-50", "CCRs", threat=False)], "threat True in the base set, False in the new one"),
+        ([summary("CCRs-50", "CCRs-offset")], "family 'CCRs' in the base set, 'CCRs-offset' in the new one"),
         ([{"scenario": "CCRs-50"}], "lacks family, seed, threat"),
+        ([dict(BASE[0], seed=None)], "seed None is not an integer"),
+        ([dict(BASE[0], scenario=None)], "scenario None is not a name"),
+        ([dict(BASE[0], ttc_at_first_warning_s="2.5")], "ttc_at_first_warning_s '2.5' is not a number"),
+        ([dict(BASE[0], collision="no")], "collision 'no' is not true or false"),
+        ([3], "a run summary is int"),
+        (b"\xff\xfe", "not readable"),
+        (b"[{", "not valid JSON"),
     ],
 )
 def test_bad_sets_are_refused_and_nothing_is_written(tmp_path, capsys, new, message):
     a = write_set(tmp_path / "a", BASE)
-    b = str(tmp_path / "b") if new is None else write_set(tmp_path / "b", new)
+    if isinstance(new, bytes):
+        (tmp_path / "b").mkdir()
+        (tmp_path / "b" / "summary.json").write_bytes(new)
+        b = str(tmp_path / "b")
+    else:
+        b = str(tmp_path / "b") if new is None else write_set(tmp_path / "b", new)
     out = tmp_path / "c.json"
     assert main(["compare", "--base", a, "--new", b, "--out", str(out)]) == 2
     assert message in capsys.readouterr().err
-    assert not out.exists()
+    assert sorted(p.name for p in tmp_path.iterdir()) == (["a", "b"] if new is not None else ["a"])
 
 
-def test_bad_flags_are_refused_by_name(tmp_path, capsys):
+def test_the_same_folder_twice_in_one_set_is_named(tmp_path, capsys):
     a = write_set(tmp_path / "a", BASE)
-    assert main(["compare", "--base", a, "--new", a, "--tol-kph", "-1"]) == 2
-    assert "--tol-kph" in capsys.readouterr().err
-    assert main(["compare", "--base", a, "--new", a, "--out", str(tmp_path / "c.txt")]) == 2
-    assert "--out" in capsys.readouterr().err
-    assert not (tmp_path / "c.txt").exists()
+    assert main(["compare", "--base", a, a, "--new", a]) == 2
+    assert f"run folder {a!r} is given twice in one set" in capsys.readouterr().err
+    b = write_set(tmp_path / "b", BASE[:1])
+    assert main(["compare", "--base", a, b, "--new", a]) == 2
+    assert f"case 'CCRs-50' with seed 0 is in {a}/summary.json and {b}/summary.json" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    "flags, message",
+    [
+        (["--tol-kph", "-1"], "--tol-kph"),
+        (["--tol-kph", "nan"], "--tol-kph"),
+        (["--out", "c.txt"], "--out 'c.txt': expected a .json file"),
+        (["--out", "no/such/c.json"], "does not exist"),
+        (["--out", "."], "expected a .json file"),
+    ],
+)
+def test_bad_flags_are_refused_by_name_before_anything_is_written(tmp_path, monkeypatch, capsys, flags, message):
+    a = write_set(tmp_path / "a", BASE)
+    monkeypatch.chdir(tmp_path)
+    assert main(["compare", "--base", a, "--new", a, *flags]) == 2
+    captured = capsys.readouterr()
+    assert message in captured.err and captured.out == ""
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a"]
     with pytest.raises(ConfigError, match="impact tolerance"):
         compare(load_runs([a]), load_runs([a]), tol_kph=float("nan"))

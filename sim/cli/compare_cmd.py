@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 from pathlib import Path
 
 from bittc_core.errors import CliError
@@ -14,7 +15,7 @@ def add_parser(sub) -> argparse.ArgumentParser:
         "compare",
         help="two sets of suite or run folders side by side: which figures and cases got worse",
         description="Matches the runs of two sets of `bittc suite` or `bittc run` folders by case and seed, "
-        "and prints per family, base -> new: threats avoided, false alarms, first warnings at TTC >= 2.1 s, "
+        "and prints per family, base -> new: threats avoided, false alarms, first warnings at an exact TTC >= 2.1 s, "
         "Euro NCAP points and the summed impact speed, then every case that got worse or better. With "
         "--fail-on-worse it exits with status 1 when anything got worse.",
     )
@@ -30,7 +31,9 @@ def add_parser(sub) -> argparse.ArgumentParser:
     p.add_argument("--markdown", action="store_true", help="print the table as Markdown")
     p.add_argument("--out", default=None, metavar="FILE", help="also write the comparison as JSON (.json)")
     p.add_argument(
-        "--fail-on-worse", action="store_true", help="exit with status 1 when a case or a figure got worse"
+        "--fail-on-worse",
+        action="store_true",
+        help="exit with status 1 when a case or a figure got worse, or a case of --base is missing from --new",
     )
     return p
 
@@ -39,13 +42,20 @@ def run(args) -> int:
     from bittc_core.atomic import write_text_atomic
     from sim.compare import compare, format_comparison, load_runs
 
-    if not args.tol_kph >= 0:
+    if not (args.tol_kph >= 0 and math.isfinite(args.tol_kph)):
         raise CliError(f"--tol-kph {args.tol_kph!r}: expected a number >= 0")
-    if args.out is not None and Path(args.out).suffix != ".json":
-        raise CliError(f"--out {args.out!r}: expected a .json file")
+    out = None if args.out is None else Path(args.out)
+    if out is not None:
+        if out.suffix != ".json" or out.is_dir():
+            raise CliError(f"--out {args.out!r}: expected a .json file")
+        if not out.parent.is_dir():
+            raise CliError(f"--out {args.out!r}: folder {str(out.parent)!r} does not exist")
     c = compare(load_runs(args.base), load_runs(args.new), args.tol_kph)
     print(format_comparison(c, markdown=args.markdown))
-    if args.out:
-        write_text_atomic(Path(args.out), json.dumps(c.to_dict(), indent=2) + "\n")
+    if out is not None:
+        try:
+            write_text_atomic(out, json.dumps(c.to_dict(), indent=2) + "\n")
+        except OSError as e:
+            raise CliError(f"--out {args.out!r}: not writable ({e.strerror})") from None
         print(f"wrote {args.out}")
-    return 1 if args.fail_on_worse and (c.worse or c.worse_figures) else 0
+    return 1 if args.fail_on_worse and not c.passed else 0

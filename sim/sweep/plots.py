@@ -22,8 +22,8 @@ import csv
 import math
 from pathlib import Path
 
+from sim.ncap_score import FCW_TTC_S
 from sim.sweep import ncap
-from sim.sweep.tables import FCW_TTC_S
 
 PLOTS = (
     "latency_vs_k.png",

@@ -21,11 +21,11 @@ import io
 import math
 
 from bittc_core.atomic import write_text_atomic
+from sim.ncap_score import FCW_TTC_S
 from sim.runner import SUMMARY_KEYS, TABLE_CAMERA_KEYS
 from sim.suite import _csv_value
 from sim.sweep import ncap
 
-FCW_TTC_S = 2.1  # [s] NHTSA's FCW confirmation test: a warning at TTC >= 2.1 s for a stopped lead
 RUN_KEYS = ("run_id", "status", "error", "config", "ego_speed_kph", "ncap_band", "folder")
 RESULT_COLUMNS = RUN_KEYS + tuple(k for k in SUMMARY_KEYS if k not in RUN_KEYS) + TABLE_CAMERA_KEYS
 SUMMARY_COLUMNS = (
