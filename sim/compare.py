@@ -31,6 +31,7 @@ from pathlib import Path
 
 from bittc_core.errors import ConfigError
 from sim.ncap_score import FCW_TTC_S, points
+from sim.text_table import text_table
 
 FIGURES = ("avoided", "false_alarms", "fcw", "points", "impact_kph")
 COUNTS = ("avoided", "false_alarms", "fcw")  # judged exactly; the rest with the impact tolerance
@@ -236,13 +237,7 @@ def format_comparison(c: Comparison, markdown: bool = False) -> str:
     """The per-family table, the cases that got worse and better, and the verdict."""
     head = ("family", "avoided", "false alarms", f"first warning >= {FCW_TTC_S:g} s", "points", "impact sum [km/h]")
     rows = [(r["family"], *(_cell(r, f) for f in FIGURES)) for r in c.families]
-    if markdown:
-        lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
-        lines += ["| " + " | ".join(r) + " |" for r in rows]
-    else:
-        widths = [max(len(h), *(len(r[i]) for r in rows)) for i, h in enumerate(head)]
-        fmt = "  ".join(f"{{:<{w}}}" for w in widths)
-        lines = [fmt.format(*head)] + [fmt.format(*r) for r in rows]
+    lines = [text_table(head, rows, markdown)]
     for title, cases in (("worse", c.worse), ("better", c.better)):
         lines.append(f"\n{title} ({_n(len(cases), 'case')}):" if cases else f"\n{title}: none")
         lines += [f"  {k}: {'; '.join(v)}" for k, v in cases.items()]

@@ -18,6 +18,7 @@ from functools import lru_cache
 from controllers.stages import MAX_DECEL_MPS2
 from scenarios.spec import ScenarioCase
 from sim.camera import CameraConfig
+from sim.text_table import text_table
 
 #: [s] a first warning at an exact TTC at least this early passes: the criterion of NHTSA's
 #: FCW confirmation test for a stopped lead, reported beside Euro NCAP's figures
@@ -107,10 +108,4 @@ def format_family_rows(summaries: list[dict], markdown: bool = False) -> str:
             "-" if r["points"] is None else f"{r['points']:.2f}/{r['threats']}",
         )
 
-    rows = [cells(r) for r in family_rows(summaries)]
-    if markdown:
-        lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
-        return "\n".join(lines + ["| " + " | ".join(c) + " |" for c in rows])
-    widths = [max(len(h), *(len(c[i]) for c in rows)) for i, h in enumerate(head)]
-    fmt = "  ".join(f"{{:<{w}}}" for w in widths)
-    return "\n".join([fmt.format(*head)] + [fmt.format(*c) for c in rows])
+    return text_table(head, [cells(r) for r in family_rows(summaries)], markdown)

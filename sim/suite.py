@@ -14,6 +14,7 @@ from sim.camera import CameraConfig
 from sim.latency import LatencyMode
 from sim.ncap_score import format_family_rows, impact_share, points
 from sim.runner import SUMMARY_KEYS, TABLE_CAMERA_KEYS, run_case
+from sim.text_table import text_table
 from sim.textures import TextureStyle
 
 TABLE_COLUMNS = (
@@ -144,9 +145,10 @@ def format_table(summaries: list[dict], markdown: bool = False) -> str:
     if len({s["family"] for s in summaries}) > 1:
         total += "\n\n" + format_family_rows(summaries, markdown)
     if markdown:
-        lines = ["| " + " | ".join(HEADERS.get(k, k) for k, _ in cols) + " |", "|" + "---|" * len(cols)]
-        lines += ["| " + " | ".join(cell(s, k) for k, _ in cols) + " |" for s in summaries]
-        return "\n".join(lines + ["", total])
+        table = text_table(
+            [HEADERS.get(k, k) for k, _ in cols], [[cell(s, k) for k, _ in cols] for s in summaries], True
+        )
+        return "\n".join([table, "", total])
     head = " ".join(f"{HEADERS.get(k, k):<{n}}" for k, n in cols)
     lines = [head, "-" * len(head)]
     lines += [" ".join(f"{cell(s, k):<{n}}" for k, n in cols) for s in summaries]

@@ -25,6 +25,7 @@ from sim.ncap_score import FCW_TTC_S
 from sim.runner import SUMMARY_KEYS, TABLE_CAMERA_KEYS
 from sim.suite import _csv_value
 from sim.sweep import ncap
+from sim.text_table import text_table
 
 RUN_KEYS = ("run_id", "status", "error", "config", "ego_speed_kph", "ncap_band", "folder")
 RESULT_COLUMNS = RUN_KEYS + tuple(k for k in SUMMARY_KEYS if k not in RUN_KEYS) + TABLE_CAMERA_KEYS
@@ -181,8 +182,7 @@ def family_summary(rows: list[dict]) -> list[tuple[str, ...]]:
 
 
 def family_markdown(rows: list[dict]) -> str:
-    lines = ["| " + " | ".join(FAMILY_HEAD) + " |", "|" + "---|" * len(FAMILY_HEAD)]
-    return "\n".join(lines + ["| " + " | ".join(c) + " |" for c in family_summary(rows)])
+    return text_table(FAMILY_HEAD, family_summary(rows), markdown=True)
 
 
 def _fmt(v, nd=2) -> str:
@@ -236,6 +236,4 @@ def summary_cells(s: dict) -> tuple[str, ...]:
 
 
 def markdown_table(summary: list[dict]) -> str:
-    lines = ["| " + " | ".join(SUMMARY_HEAD) + " |", "|" + "---|" * len(SUMMARY_HEAD)]
-    lines += ["| " + " | ".join(summary_cells(s)) + " |" for s in summary]
-    return "\n".join(lines)
+    return text_table(SUMMARY_HEAD, [summary_cells(s) for s in summary], markdown=True)
