@@ -11,8 +11,8 @@ from bittc_core.model import BinaryTTCNet, get_config
 from bittc_core.model.flip import flip_views, merge_flip_views
 from bittc_core.train import TrainConfig
 from bittc_core.train.distill import flip_averaged_logits
-from bittc_core.train.losses import masked_bce
-from bittc_core.train.targets import sample_eta, sample_shifts_px, valid_mask
+from bittc_core.train.losses import lovasz_two_class, masked_bce
+from bittc_core.train.targets import eta_labels, sample_eta, sample_shifts_px, valid_mask
 from sim.cli import train_cmd
 from sim.cli.train_flags import check_train_flags
 from tests import train_helpers
@@ -86,6 +86,36 @@ def test_distill_term_is_the_bce_towards_the_teachers_averaged_maps(tmp_path, ac
     assert all(p.grad is None for p in tr.teacher.parameters())
 
 
+@pytest.mark.parametrize("distill_weight", [1.0, 0.3])
+def test_scenery_scope_puts_the_teachers_maps_on_scenery_and_keeps_the_actors_ground_truth(tmp_path, distill_weight):
+    kw = dict(actor_weight=2.0, lovasz_weight=0.5)
+    tr = make_trainer(tmp_path, tiny_net(0), distill_weight=distill_weight, distill_scope="scenery", **kw)
+    batch = next(iter(tr.loader))
+    scenery = batch["instance"] == 0
+    assert scenery.any() and (~scenery).any()
+    tr.gen.manual_seed(5)
+    parts = tr.losses(batch)
+    # rebuild the mixed targets by hand from the same hypotheses
+    tr.gen.manual_seed(5)
+    b, c, mc = batch["image_prev"].shape[0], tr.cfg, tr.net.config
+    sample_shifts_px(b, c.shifts_per_pair, mc.max_shift_px, tr.gen)
+    thr = sample_eta(b, c.thresholds_per_pair, c.train_tau_min_s, c.train_eta_max, mc.frame_dt_s, tr.gen)
+    with torch.no_grad():
+        logits = tr.net(batch["image_prev"], batch["image_latest"], thr)
+    soft = torch.sigmoid(flip_averaged_logits(tr.teacher, batch["image_prev"], batch["image_latest"], thr))
+    mask = valid_mask(batch)[:, None]
+    target = torch.where(scenery[:, None], soft, eta_labels(batch["eta"], thr))
+    weight = torch.where(scenery, distill_weight, 2.0)[:, None]
+    expected = masked_bce(logits, target, mask, weight) + 0.5 * lovasz_two_class(logits, target.round(), mask)
+    assert parts["ttc"].item() == pytest.approx(expected.item(), rel=1e-4)
+    logged = masked_bce(logits, soft, mask & scenery[:, None])
+    assert parts["distill"].item() == pytest.approx(logged.item(), rel=1e-4)
+    # the ground truth's scenery labels no longer count: flip them and the loss stays
+    flipped = dict(batch, eta=torch.where(scenery, 2.0 - batch["eta"], batch["eta"]))
+    tr.gen.manual_seed(5)
+    assert tr.losses(flipped)["ttc"].item() == pytest.approx(parts["ttc"].item(), rel=1e-4)
+
+
 def _teacher_gap_after_steps(tmp_path, distill_weight: float) -> tuple[float, float]:
     """Mean |p_student - p_teacher| on one fixed batch before and after 15 steps on it."""
     teacher = tiny_net(0)
@@ -132,6 +162,8 @@ def test_distillation_settings_are_checked(tmp_path):
         TrainConfig(stage="flow", distill_weight=1.0)
     with pytest.raises(ValueError, match="distill_weight=-1"):
         TrainConfig(distill_weight=-1.0)
+    with pytest.raises(ValueError, match="distill_scope 'actors'"):
+        TrainConfig(distill_scope="actors")
     with pytest.raises(ValueError, match="another network of the student's model config"):
         make_trainer(tmp_path, BinaryTTCNet(get_config("cpu-small")), distill_weight=1.0)
 
@@ -151,6 +183,8 @@ def test_train_cli_refuses_a_teacher_of_another_config_or_its_own_output(tmp_pat
         train_cmd.run(cli_args(tmp_path, "--teacher", own))
     with pytest.raises(CliError, match="--distill-weight 0.0: must be > 0"):
         check_train_flags(cli_args(tmp_path, "--teacher", other, "--distill-weight", "0"))
+    with pytest.raises(CliError, match="--distill-scope scenery: needs --teacher"):
+        check_train_flags(cli_args(tmp_path, "--distill-scope", "scenery"))
 
 
 def test_resume_keeps_the_teacher(tmp_path):
@@ -158,7 +192,11 @@ def test_resume_keeps_the_teacher(tmp_path):
     assert train_cmd.run(cli_args(tmp_path, "--teacher", teacher, "--distill-weight", "0.5")) == 0
     for extra, match in (
         (["--resume"], "--teacher None"),
-        (["--resume", "--teacher", teacher], r"not --teacher .* \(distill weight 1\)"),
+        (["--resume", "--teacher", teacher], r"not --teacher .* \(distill weight 1, scope all\)"),
+        (
+            ["--resume", "--teacher", teacher, "--distill-weight", "0.5", "--distill-scope", "scenery"],
+            r"\(distill weight 0.5, scope all\), not .* scope scenery\)",
+        ),
         (
             ["--resume", "--teacher", save_net(tmp_path / "t2.pt", tiny_net(3), "tiny"), "--distill-weight", "0.5"],
             "t2.pt",

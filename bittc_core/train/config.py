@@ -6,6 +6,7 @@ import math
 from dataclasses import dataclass
 
 STAGES = ("flow", "binary", "continuous")
+DISTILL_SCOPES = ("all", "scenery")
 
 
 @dataclass(frozen=True)
@@ -45,6 +46,12 @@ class TrainConfig:
     # binary stage: + this x BCE towards a frozen teacher's flip-averaged maps (``train.distill``;
     # pixels weighted as in the ground-truth BCE); > 0 needs a teacher network of the same config
     distill_weight: float = 0.0
+    # where the teacher teaches (one of DISTILL_SCOPES): "all" adds its term beside the ground
+    # truth on every pixel; "scenery" replaces the ground truth by the teacher's maps on scenery
+    # pixels (instance 0), their weight times ``distill_weight``, and leaves the actors' ground
+    # truth alone: the scenery's fences (the road's own fence edge that a controller's margins
+    # were tuned on) stay the teacher's while the actors learn from new data
+    distill_scope: str = "all"
     ttc_weight: float = 0.8  # paper: binary TTC 0.8, binary flow 0.2
     flow_weight: float = 0.2
     cont_bce_weight: float = 0.1  # paper: BCE on the stacked maps 0.1, SmoothL1 on AUC 0.9
@@ -98,6 +105,8 @@ class TrainConfig:
             raise ValueError(f"lovasz_weight={self.lovasz_weight}: must be >= 0")
         if self.distill_weight < 0:
             raise ValueError(f"distill_weight={self.distill_weight}: must be >= 0")
+        if self.distill_scope not in DISTILL_SCOPES:
+            raise ValueError(f"distill_scope {self.distill_scope!r}: expected one of {DISTILL_SCOPES}")
         if self.distill_weight > 0 and self.stage != "binary":
             raise ValueError(f"distill_weight applies to the binary stage, not {self.stage!r}")
         if not 0.0 <= self.pixel_threshold_share <= 1.0:

@@ -52,6 +52,16 @@ def binary_thresholds(c: TrainConfig, batch: dict, mask: torch.Tensor, dt_s: flo
     return thr
 
 
+def _scenery_from_teacher(c: TrainConfig, batch: dict, mask, logits, labels, soft, weight):
+    """``distill_scope`` "scenery": on scenery pixels (instance 0) the teacher's soft maps
+    replace the ground-truth labels, their weight times ``distill_weight``; actors keep the
+    ground truth. -> (labels, weight, the scenery's BCE towards the teacher, for the log)."""
+    scenery = (batch["instance"] == 0)[:, None]
+    base = weight if weight is not None else torch.ones_like(batch["eta"])[:, None]
+    log = masked_bce(logits.detach(), soft, mask[:, None] & scenery)
+    return torch.where(scenery, soft, labels), torch.where(scenery, c.distill_weight * base, base), log
+
+
 def stage_losses(
     net: BinaryTTCNet,
     c: TrainConfig,
@@ -95,12 +105,16 @@ def stage_losses(
             scenery = (batch["instance"] == 0)[:, None]
             weight = torch.where(near_outside(eta, thr) & scenery, c.near_outside_weight * base, base)
         labels = eta_labels(eta, thr)
-        out["ttc"] = masked_bce(logits, labels, mask[:, None], weight)
-        if c.lovasz_weight > 0:
-            out["iou"] = lovasz_two_class(logits, labels, mask[:, None])
-            out["ttc"] = out["ttc"] + c.lovasz_weight * out["iou"]
+        soft = None
         if teacher is not None:
             soft = torch.sigmoid(flip_averaged_logits(teacher, batch["image_prev"], batch["image_latest"], thr))
+            if c.distill_scope == "scenery":
+                labels, weight, out["distill"] = _scenery_from_teacher(c, batch, mask, logits, labels, soft, weight)
+        out["ttc"] = masked_bce(logits, labels, mask[:, None], weight)
+        if c.lovasz_weight > 0:
+            out["iou"] = lovasz_two_class(logits, labels.round(), mask[:, None])
+            out["ttc"] = out["ttc"] + c.lovasz_weight * out["iou"]
+        if soft is not None and c.distill_scope == "all":
             out["distill"] = masked_bce(logits, soft, mask[:, None], weight)
             out["ttc"] = out["ttc"] + c.distill_weight * out["distill"]
     else:

@@ -128,6 +128,14 @@ def _add_loss_flags(p: argparse.ArgumentParser) -> None:
         default=None,
         help="with --teacher: weight of the distillation BCE beside the ground-truth BCE (default 1)",
     )
+    p.add_argument(
+        "--distill-scope",
+        choices=("all", "scenery"),
+        default=None,
+        help="with --teacher: 'all' (default) adds the teacher's term beside the ground truth on every "
+        "pixel; 'scenery' replaces the ground truth by the teacher's maps on scenery pixels only "
+        "(weighted by --distill-weight), the actors (vehicles, road users) keep the ground truth",
+    )
 
 
 def _add_what_learns_flags(p: argparse.ArgumentParser) -> None:
@@ -207,6 +215,8 @@ def check_train_flags(args) -> None:
             raise CliError(f"--teacher applies to --stage binary, not --stage {args.stage!r}")
         if not Path(args.teacher).is_file():
             raise CliError(f"--teacher {args.teacher!r}: no such file")
+    if args.distill_scope is not None and args.teacher is None:
+        raise CliError(f"--distill-scope {args.distill_scope}: needs --teacher")
     if args.distill_weight is not None:
         if args.teacher is None:
             raise CliError("--distill-weight needs --teacher")

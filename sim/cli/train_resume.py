@@ -31,7 +31,7 @@ def stages_to_run(args, paths, distill_weight, lr_mults) -> tuple[list[str], str
     last = load_checkpoint(paths.last, map_location="cpu", expected_config=args.config)
     state, meta_last = last.get("train_state", {}), last.get("train_meta", {})
     resume_stage = state.get("stage")
-    _check_same_teacher(paths.last.name, meta_last, args.teacher, distill_weight)
+    _check_same_teacher(paths.last.name, meta_last, args.teacher, distill_weight, args.distill_scope or "all")
     _check_same_lr_mults(paths.last.name, meta_last, lr_mults)
     if resume_stage not in stages:
         raise CliError(f"--resume: {paths.last.name} is at stage {resume_stage!r}, not in {stages}")
@@ -49,17 +49,19 @@ def _check_same_lr_mults(name: str, meta: dict, lr_mults: tuple[tuple[str, float
         raise CliError(f"--resume: {name} was trained with {show(old)}, not {show(lr_mults)}")
 
 
-def _check_same_teacher(name: str, meta: dict, teacher: str | None, distill_weight: float) -> None:
-    """A resumed run keeps the teacher and distillation weight it was started with."""
+def _check_same_teacher(name: str, meta: dict, teacher: str | None, distill_weight: float, scope: str) -> None:
+    """A resumed run keeps the teacher, distillation weight and scope it was started with."""
     old_teacher = meta.get("teacher")
-    old_weight = float(meta.get("train_config", {}).get("distill_weight", 0.0))
+    old_cfg = meta.get("train_config", {})
+    old_weight = float(old_cfg.get("distill_weight", 0.0))
+    old_scope = old_cfg.get("distill_scope", "all")
     same = (
         (old_teacher is None) == (teacher is None)
         and old_weight == distill_weight
-        and (teacher is None or Path(old_teacher).resolve() == Path(teacher).resolve())
+        and (teacher is None or (Path(old_teacher).resolve() == Path(teacher).resolve() and old_scope == scope))
     )
     if not same:
         raise CliError(
-            f"--resume: {name} was trained with --teacher {old_teacher!r} (distill weight {old_weight:g}), "
-            f"not --teacher {teacher!r} (distill weight {distill_weight:g})"
+            f"--resume: {name} was trained with --teacher {old_teacher!r} (distill weight {old_weight:g}, "
+            f"scope {old_scope}), not --teacher {teacher!r} (distill weight {distill_weight:g}, scope {scope})"
         )

@@ -73,6 +73,7 @@ def stage_configs(args, net, stages, lr_mults, distill_weight) -> dict:
         near_outside_weight=args.near_outside_weight,
         lovasz_weight=args.lovasz_weight,
         distill_weight=distill_weight,
+        distill_scope=args.distill_scope or "all",
         pixel_threshold_share=args.pixel_thresholds,
         inpath_threshold_share=args.inpath_thresholds,
         lr_mults=lr_mults,
