@@ -86,13 +86,18 @@ def test_distill_term_is_the_bce_towards_the_teachers_averaged_maps(tmp_path, ac
     assert all(p.grad is None for p in tr.teacher.parameters())
 
 
-@pytest.mark.parametrize("distill_weight", [1.0, 0.3])
-def test_scenery_scope_puts_the_teachers_maps_on_scenery_and_keeps_the_actors_ground_truth(tmp_path, distill_weight):
+@pytest.mark.parametrize(("scope", "distill_weight"), [("scenery", 1.0), ("scenery", 0.3), ("scenery-vehicles", 0.5)])
+def test_a_scope_puts_the_teachers_maps_where_it_says_and_keeps_the_ground_truth_elsewhere(
+    tmp_path, scope, distill_weight
+):
     kw = dict(actor_weight=2.0, lovasz_weight=0.5)
-    tr = make_trainer(tmp_path, tiny_net(0), distill_weight=distill_weight, distill_scope="scenery", **kw)
-    batch = next(iter(tr.loader))
-    scenery = batch["instance"] == 0
-    assert scenery.any() and (~scenery).any()
+    tr = make_trainer(tmp_path, tiny_net(0), distill_weight=distill_weight, distill_scope=scope, **kw)
+    batch = dict(next(iter(tr.loader)))
+    inst = batch["instance"]
+    # the synthetic pairs have no classes: odd instances vehicles (1), even ones pedestrians (2)
+    batch["actor_class"] = torch.where(inst > 0, 2 - inst % 2, 0)
+    taught = inst == 0 if scope == "scenery" else batch["actor_class"] < 2
+    assert taught.any() and (~taught).any() and ((inst > 0) & taught).any() == (scope == "scenery-vehicles")
     tr.gen.manual_seed(5)
     parts = tr.losses(batch)
     # rebuild the mixed targets by hand from the same hypotheses
@@ -104,16 +109,21 @@ def test_scenery_scope_puts_the_teachers_maps_on_scenery_and_keeps_the_actors_gr
         logits = tr.net(batch["image_prev"], batch["image_latest"], thr)
     soft = torch.sigmoid(flip_averaged_logits(tr.teacher, batch["image_prev"], batch["image_latest"], thr))
     mask = valid_mask(batch)[:, None]
-    target = torch.where(scenery[:, None], soft, eta_labels(batch["eta"], thr))
-    weight = torch.where(scenery, distill_weight, 2.0)[:, None]
+    target = torch.where(taught[:, None], soft, eta_labels(batch["eta"], thr))
+    weight = torch.where(inst > 0, 2.0, 1.0)[:, None]
+    weight = torch.where(taught[:, None], distill_weight * weight, weight)
     expected = masked_bce(logits, target, mask, weight) + 0.5 * lovasz_two_class(logits, target.round(), mask)
     assert parts["ttc"].item() == pytest.approx(expected.item(), rel=1e-4)
-    logged = masked_bce(logits, soft, mask & scenery[:, None])
+    logged = masked_bce(logits, soft, mask & taught[:, None])
     assert parts["distill"].item() == pytest.approx(logged.item(), rel=1e-4)
-    # the ground truth's scenery labels no longer count: flip them and the loss stays
-    flipped = dict(batch, eta=torch.where(scenery, 2.0 - batch["eta"], batch["eta"]))
+    # the ground truth where the teacher teaches no longer counts: flip it and the loss stays
+    flipped = dict(batch, eta=torch.where(taught, 2.0 - batch["eta"], batch["eta"]))
     tr.gen.manual_seed(5)
     assert tr.losses(flipped)["ttc"].item() == pytest.approx(parts["ttc"].item(), rel=1e-4)
+    if scope == "scenery-vehicles":
+        del batch["actor_class"]
+        with pytest.raises(ValueError, match="'scenery-vehicles' needs the dataset's actor classes"):
+            tr.losses(batch)
 
 
 def _teacher_gap_after_steps(tmp_path, distill_weight: float) -> tuple[float, float]:

@@ -35,6 +35,7 @@ def args(**kw):
         lovasz_weight=0.0,
         teacher=None,
         distill_weight=None,
+        distill_scope=None,
         pixel_thresholds=0.0,
         inpath_thresholds=0.0,
         lr_mult=[],

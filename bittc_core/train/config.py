@@ -6,7 +6,7 @@ import math
 from dataclasses import dataclass
 
 STAGES = ("flow", "binary", "continuous")
-DISTILL_SCOPES = ("all", "scenery")
+DISTILL_SCOPES = ("all", "scenery", "scenery-vehicles")
 
 
 @dataclass(frozen=True)
@@ -50,7 +50,8 @@ class TrainConfig:
     # truth on every pixel; "scenery" replaces the ground truth by the teacher's maps on scenery
     # pixels (instance 0), their weight times ``distill_weight``, and leaves the actors' ground
     # truth alone: the scenery's fences (the road's own fence edge that a controller's margins
-    # were tuned on) stay the teacher's while the actors learn from new data
+    # were tuned on) stay the teacher's while the actors learn from new data; "scenery-vehicles"
+    # replaces it on vehicles too, so that only pedestrians and cyclists learn from the data
     distill_scope: str = "all"
     ttc_weight: float = 0.8  # paper: binary TTC 0.8, binary flow 0.2
     flow_weight: float = 0.2

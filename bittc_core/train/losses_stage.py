@@ -52,14 +52,25 @@ def binary_thresholds(c: TrainConfig, batch: dict, mask: torch.Tensor, dt_s: flo
     return thr
 
 
-def _scenery_from_teacher(c: TrainConfig, batch: dict, mask, logits, labels, soft, weight):
-    """``distill_scope`` "scenery": on scenery pixels (instance 0) the teacher's soft maps
-    replace the ground-truth labels, their weight times ``distill_weight``; actors keep the
-    ground truth. -> (labels, weight, the scenery's BCE towards the teacher, for the log)."""
-    scenery = (batch["instance"] == 0)[:, None]
+def _teacher_where(c: TrainConfig, batch: dict) -> torch.Tensor:
+    """(B, 1, H, W) the pixels whose labels the teacher's maps replace (``distill_scope``):
+    scenery (instance 0), with "scenery-vehicles" also vehicles (every class but the road users)."""
+    if c.distill_scope == "scenery":
+        return (batch["instance"] == 0)[:, None]
+    if "actor_class" not in batch:
+        raise ValueError(f"distill_scope {c.distill_scope!r} needs the dataset's actor classes (actor_class)")
+    return (batch["actor_class"] < 2)[:, None]  # 0 none, 1 vehicle; 2 pedestrian, 3 cyclist learn the labels
+
+
+def _labels_from_teacher(c: TrainConfig, batch: dict, mask, logits, labels, soft, weight):
+    """``distill_scope`` "scenery" or "scenery-vehicles": where ``_teacher_where``, the
+    teacher's soft maps replace the ground-truth labels, their weight times
+    ``distill_weight``; elsewhere the ground truth stays. -> (labels, weight, the BCE towards
+    the teacher there, for the log)."""
+    taught = _teacher_where(c, batch)
     base = weight if weight is not None else torch.ones_like(batch["eta"])[:, None]
-    log = masked_bce(logits.detach(), soft, mask[:, None] & scenery)
-    return torch.where(scenery, soft, labels), torch.where(scenery, c.distill_weight * base, base), log
+    log = masked_bce(logits.detach(), soft, mask[:, None] & taught)
+    return torch.where(taught, soft, labels), torch.where(taught, c.distill_weight * base, base), log
 
 
 def stage_losses(
@@ -108,8 +119,8 @@ def stage_losses(
         soft = None
         if teacher is not None:
             soft = torch.sigmoid(flip_averaged_logits(teacher, batch["image_prev"], batch["image_latest"], thr))
-            if c.distill_scope == "scenery":
-                labels, weight, out["distill"] = _scenery_from_teacher(c, batch, mask, logits, labels, soft, weight)
+            if c.distill_scope != "all":
+                labels, weight, out["distill"] = _labels_from_teacher(c, batch, mask, logits, labels, soft, weight)
         out["ttc"] = masked_bce(logits, labels, mask[:, None], weight)
         if c.lovasz_weight > 0:
             out["iou"] = lovasz_two_class(logits, labels.round(), mask[:, None])

@@ -130,11 +130,12 @@ def _add_loss_flags(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument(
         "--distill-scope",
-        choices=("all", "scenery"),
+        choices=("all", "scenery", "scenery-vehicles"),
         default=None,
         help="with --teacher: 'all' (default) adds the teacher's term beside the ground truth on every "
         "pixel; 'scenery' replaces the ground truth by the teacher's maps on scenery pixels only "
-        "(weighted by --distill-weight), the actors (vehicles, road users) keep the ground truth",
+        "(weighted by --distill-weight), the actors (vehicles, road users) keep the ground truth; "
+        "'scenery-vehicles' on vehicles too, only pedestrians and cyclists keep it",
     )
 
 
