@@ -5,8 +5,8 @@
 #   1. data: for s in "val 400" "test 400" "train 8000"; do set -- $s; bittc generate --out data/bittc_v11 \
 #              --fps 3.333333 --fovea-share 0.4 --vehicle-texture mixed --realism-share 0.5 --realism-codecs jpeg \
 #              --vru-share 0.6 --split $1 --samples $2 --seed 11 --workers 2; done
-#   2. this script: [START=FILE] [TEACHER=FILE [DISTILL_SCOPE=scenery|scenery-vehicles]] [FREEZE_NORM_STATS=1] [SHIP=1] \
-#        bash docs/train_pair3_weights.sh \
+#   2. this script: [START=FILE] [TEACHER=FILE [DISTILL_SCOPE=scenery|scenery-vehicles]] \
+#        [FREEZE_NORM_STATS=1] [SHIP=1] bash docs/train_pair3_weights.sh \
 #        [DATA_V11] [OUT] [RELEASE]
 #      bittc-2026.12-pair3f: FREEZE_NORM_STATS=1 bash docs/train_pair3_weights.sh data/bittc_v11 runs/pair3f \
 #        bittc-2026.12-pair3f
@@ -32,5 +32,6 @@ source "$(dirname "$0")/release_steps.sh"
 # DISTILL_SCOPE=scenery: its maps instead of the ground truth on scenery pixels, the actors' ground truth kept;
 # DISTILL_SCOPE=scenery-vehicles: on vehicles too, only the road users learn the ground truth
 finetune_release "$DATA11" "$OUT" "$RELEASE" 90 --vru-weight 6 \
-    ${TEACHER:+--teacher "$TEACHER" --distill-weight "${DISTILL_WEIGHT:-1}" ${DISTILL_SCOPE:+--distill-scope "$DISTILL_SCOPE"}} \
+    ${TEACHER:+--teacher "$TEACHER" --distill-weight "${DISTILL_WEIGHT:-1}"} \
+    ${DISTILL_SCOPE:+--distill-scope "$DISTILL_SCOPE"} \
     $([ "${FREEZE_NORM_STATS:-0}" = 1 ] && echo --freeze-norm-stats)

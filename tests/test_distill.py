@@ -57,6 +57,19 @@ def make_trainer(tmp_path, teacher, **kw):
     return train_helpers.make_trainer(tmp_path, net_seed=1, teacher=teacher, **kw)
 
 
+def _same_hypotheses(tr, batch, seed: int):
+    """The thresholds that ``tr.losses(batch)`` draws after ``tr.gen.manual_seed(seed)``, the
+    student's logits on them and the teacher's flip-averaged probabilities."""
+    tr.gen.manual_seed(seed)
+    b, c, mc = batch["image_prev"].shape[0], tr.cfg, tr.net.config
+    sample_shifts_px(b, c.shifts_per_pair, mc.max_shift_px, tr.gen)
+    thr = sample_eta(b, c.thresholds_per_pair, c.train_tau_min_s, c.train_eta_max, mc.frame_dt_s, tr.gen)
+    with torch.no_grad():
+        logits = tr.net(batch["image_prev"], batch["image_latest"], thr)
+    soft = torch.sigmoid(flip_averaged_logits(tr.teacher, batch["image_prev"], batch["image_latest"], thr))
+    return thr, logits, soft
+
+
 @pytest.mark.parametrize("actor_weight", [1.0, 2.0])
 def test_distill_term_is_the_bce_towards_the_teachers_averaged_maps(tmp_path, actor_weight):
     tr = make_trainer(tmp_path, tiny_net(0), distill_weight=0.7, actor_weight=actor_weight)
@@ -71,13 +84,7 @@ def test_distill_term_is_the_bce_towards_the_teachers_averaged_maps(tmp_path, ac
     plain = base.losses(batch)
     assert "distill" not in plain
     # rebuild the distillation target by hand from the same hypotheses
-    tr.gen.manual_seed(5)
-    b, c, mc = batch["image_prev"].shape[0], tr.cfg, tr.net.config
-    sample_shifts_px(b, c.shifts_per_pair, mc.max_shift_px, tr.gen)
-    thr = sample_eta(b, c.thresholds_per_pair, c.train_tau_min_s, c.train_eta_max, mc.frame_dt_s, tr.gen)
-    with torch.no_grad():
-        logits = tr.net(batch["image_prev"], batch["image_latest"], thr)
-    soft = torch.sigmoid(flip_averaged_logits(tr.teacher, batch["image_prev"], batch["image_latest"], thr))
+    thr, logits, soft = _same_hypotheses(tr, batch, 5)
     weight = torch.where(batch["instance"] > 0, actor_weight, 1.0)[:, None]
     expected = masked_bce(logits, soft, valid_mask(batch)[:, None], weight)
     assert parts["distill"].item() == pytest.approx(expected.item(), rel=1e-4)
@@ -101,13 +108,7 @@ def test_a_scope_puts_the_teachers_maps_where_it_says_and_keeps_the_ground_truth
     tr.gen.manual_seed(5)
     parts = tr.losses(batch)
     # rebuild the mixed targets by hand from the same hypotheses
-    tr.gen.manual_seed(5)
-    b, c, mc = batch["image_prev"].shape[0], tr.cfg, tr.net.config
-    sample_shifts_px(b, c.shifts_per_pair, mc.max_shift_px, tr.gen)
-    thr = sample_eta(b, c.thresholds_per_pair, c.train_tau_min_s, c.train_eta_max, mc.frame_dt_s, tr.gen)
-    with torch.no_grad():
-        logits = tr.net(batch["image_prev"], batch["image_latest"], thr)
-    soft = torch.sigmoid(flip_averaged_logits(tr.teacher, batch["image_prev"], batch["image_latest"], thr))
+    thr, logits, soft = _same_hypotheses(tr, batch, 5)
     mask = valid_mask(batch)[:, None]
     target = torch.where(taught[:, None], soft, eta_labels(batch["eta"], thr))
     weight = torch.where(inst > 0, 2.0, 1.0)[:, None]
@@ -174,6 +175,8 @@ def test_distillation_settings_are_checked(tmp_path):
         TrainConfig(distill_weight=-1.0)
     with pytest.raises(ValueError, match="distill_scope 'actors'"):
         TrainConfig(distill_scope="actors")
+    with pytest.raises(ValueError, match="distill_scope 'scenery' needs a teacher"):
+        TrainConfig(distill_scope="scenery")
     with pytest.raises(ValueError, match="another network of the student's model config"):
         make_trainer(tmp_path, BinaryTTCNet(get_config("cpu-small")), distill_weight=1.0)
 
@@ -216,3 +219,19 @@ def test_resume_keeps_the_teacher(tmp_path):
             train_cmd.run(cli_args(tmp_path, *extra))
     args = cli_args(tmp_path, "--resume", "--teacher", teacher, "--distill-weight", "0.5", "--steps", "3")
     assert train_cmd.run(args) == 0
+
+
+def test_the_cli_stores_the_scope_and_resume_keeps_it(tmp_path):
+    from bittc_core.checkpoint import load_checkpoint
+
+    teacher = save_net(tmp_path / "teacher.pt", tiny_net(0), "tiny")
+    assert train_cmd.run(cli_args(tmp_path, "--teacher", teacher, "--distill-scope", "scenery")) == 0
+    assert load_checkpoint(tmp_path / "m.pt")["train_meta"]["train_config"]["distill_scope"] == "scenery"
+    with pytest.raises(CliError, match=r"scope scenery\), not --teacher .* scope all\)"):
+        train_cmd.run(cli_args(tmp_path, "--resume", "--teacher", teacher))
+    args = cli_args(tmp_path, "--resume", "--teacher", teacher, "--distill-scope", "scenery", "--steps", "3")
+    assert train_cmd.run(args) == 0
+    # the synthetic pairs have no classes: nothing to keep the road users' ground truth of
+    with pytest.raises(CliError, match="--distill-scope scenery-vehicles: --data 'synthetic' has no actor classes"):
+        train_cmd.run(cli_args(tmp_path / "sv", "--teacher", teacher, "--distill-scope", "scenery-vehicles"))
+    assert not (tmp_path / "sv").exists() or not any((tmp_path / "sv").iterdir())

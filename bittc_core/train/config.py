@@ -48,7 +48,8 @@ class TrainConfig:
     distill_weight: float = 0.0
     # where the teacher teaches (one of DISTILL_SCOPES): "all" adds its term beside the ground
     # truth on every pixel; "scenery" replaces the ground truth by the teacher's maps on scenery
-    # pixels (instance 0), their weight times ``distill_weight``, and leaves the actors' ground
+    # pixels (instance 0), their BCE weight times ``distill_weight`` (relative to the ground
+    # truth's pixels; the Lovasz term reads the teacher's maps rounded), and leaves the actors' ground
     # truth alone: the scenery's fences (the road's own fence edge that a controller's margins
     # were tuned on) stay the teacher's while the actors learn from new data; "scenery-vehicles"
     # replaces it on vehicles too, so that only pedestrians and cyclists learn from the data
@@ -108,6 +109,8 @@ class TrainConfig:
             raise ValueError(f"distill_weight={self.distill_weight}: must be >= 0")
         if self.distill_scope not in DISTILL_SCOPES:
             raise ValueError(f"distill_scope {self.distill_scope!r}: expected one of {DISTILL_SCOPES}")
+        if self.distill_scope != "all" and self.distill_weight == 0:
+            raise ValueError(f"distill_scope {self.distill_scope!r} needs a teacher: distill_weight > 0")
         if self.distill_weight > 0 and self.stage != "binary":
             raise ValueError(f"distill_weight applies to the binary stage, not {self.stage!r}")
         if not 0.0 <= self.pixel_threshold_share <= 1.0:

@@ -5,7 +5,8 @@ TTC (several eta thresholds per pair, vehicle (actor) pixels, moving or not, wei
 ``actor_weight``; BCE,
 plus ``lovasz_weight`` x a Lovasz surrogate of the per-map two-class IoU, plus
 ``distill_weight`` x BCE towards a frozen teacher's flip-averaged maps, actor pixels
-weighted alike) + binary flow
+weighted alike; with ``distill_scope`` "scenery" or "scenery-vehicles" the teacher's maps
+replace the labels on those pixels instead) + binary flow
 auxiliary, weights 0.8 / 0.2;
 ``continuous``: the stacked TTC volume, BCE on its maps (0.1) + SmoothL1 on the AUC and
 refined log eta (0.9), still with the flow auxiliary (0.8 / 0.2); with

@@ -52,7 +52,7 @@ def binary_thresholds(c: TrainConfig, batch: dict, mask: torch.Tensor, dt_s: flo
     return thr
 
 
-def _teacher_where(c: TrainConfig, batch: dict) -> torch.Tensor:
+def _taught_pixels(c: TrainConfig, batch: dict) -> torch.Tensor:
     """(B, 1, H, W) the pixels whose labels the teacher's maps replace (``distill_scope``):
     scenery (instance 0), with "scenery-vehicles" also vehicles (every class but the road users)."""
     if c.distill_scope == "scenery":
@@ -62,14 +62,24 @@ def _teacher_where(c: TrainConfig, batch: dict) -> torch.Tensor:
     return (batch["actor_class"] < 2)[:, None]  # 0 none, 1 vehicle; 2 pedestrian, 3 cyclist learn the labels
 
 
-def _labels_from_teacher(c: TrainConfig, batch: dict, mask, logits, labels, soft, weight):
-    """``distill_scope`` "scenery" or "scenery-vehicles": where ``_teacher_where``, the
-    teacher's soft maps replace the ground-truth labels, their weight times
-    ``distill_weight``; elsewhere the ground truth stays. -> (labels, weight, the BCE towards
-    the teacher there, for the log)."""
-    taught = _teacher_where(c, batch)
+def _labels_from_teacher(
+    c: TrainConfig,
+    batch: dict,
+    mask: torch.Tensor,
+    logits: torch.Tensor,
+    labels: torch.Tensor,
+    soft: torch.Tensor,
+    weight: torch.Tensor | None,
+) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+    """``distill_scope`` "scenery" or "scenery-vehicles": on ``_taught_pixels`` the teacher's
+    soft maps replace the ground-truth labels and their BCE weight is times ``distill_weight``
+    (relative to the ground-truth pixels: the BCE is a weighted mean); the Lovasz term reads
+    the teacher's maps rounded at 0.5 there, unweighted. Elsewhere the ground truth stays.
+    -> (labels, weight, the BCE towards the teacher on the taught pixels, pixel-weighted as
+    the "all" scope logs it)."""
+    taught = _taught_pixels(c, batch)
     base = weight if weight is not None else torch.ones_like(batch["eta"])[:, None]
-    log = masked_bce(logits.detach(), soft, mask[:, None] & taught)
+    log = masked_bce(logits.detach(), soft, mask[:, None] & taught, base)
     return torch.where(taught, soft, labels), torch.where(taught, c.distill_weight * base, base), log
 
 

@@ -8,6 +8,7 @@ from pathlib import Path
 
 from bittc_core.errors import CliError
 from bittc_core.model.config import CONFIGS
+from bittc_core.train.config import DISTILL_SCOPES
 from sim.cli.common import add_device_flag, add_seed_flag, check_device, check_seed
 
 STAGE_CHOICES = ("flow", "binary", "continuous", "all")
@@ -126,11 +127,12 @@ def _add_loss_flags(p: argparse.ArgumentParser) -> None:
         "--distill-weight",
         type=float,
         default=None,
-        help="with --teacher: weight of the distillation BCE beside the ground-truth BCE (default 1)",
+        help="with --teacher: weight of the distillation BCE beside the ground-truth BCE (default 1); "
+        "with a --distill-scope other than 'all', the weight of the taught pixels against the ground truth's",
     )
     p.add_argument(
         "--distill-scope",
-        choices=("all", "scenery", "scenery-vehicles"),
+        choices=DISTILL_SCOPES,
         default=None,
         help="with --teacher: 'all' (default) adds the teacher's term beside the ground truth on every "
         "pixel; 'scenery' replaces the ground truth by the teacher's maps on scenery pixels only "

@@ -51,6 +51,11 @@ def open_splits(args, net):
                 f"{args.config!r} is trained at frame_dt_s = {net.config.frame_dt_s:g} s"
                 + (f" and --frame-stride {args.frame_stride} asks for {want:g} s" if args.frame_stride != 1 else "")
             )
+    if args.distill_scope == "scenery-vehicles" and "actor_class" not in train_set[0]:
+        raise CliError(
+            f"--distill-scope scenery-vehicles: --data {args.data!r} has no actor classes (pedestrians, cyclists) "
+            "to keep the ground truth of"
+        )
     return train_set, val_set
 
 
