@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 
 from bittc_core.errors import BittcError, CliError
-from sim.cli.common import DEFAULT_FOVEA, check_frame_size, parse_fovea, parse_size
+from sim.cli.common import DEFAULT_FOVEA, check_frame_size, output_file, parse_fovea, parse_size
 
 DEFAULT_CONFIG = "cpu-small-corr"
 
@@ -212,11 +212,7 @@ def run(args) -> int:
         raise CliError("--out applies with --fovea (the job benchmark)")
     if args.fovea is not None:
         if args.out is not None:
-            out = Path(args.out)
-            if out.suffix != ".json":
-                raise CliError(f"--out {args.out!r}: expected a .json file")
-            if not out.parent.is_dir():
-                raise CliError(f"--out {args.out!r}: folder {str(out.parent)!r} does not exist")
+            output_file(args.out, (".json",))
         if args.config is not None:
             raise CliError("--config with --fovea: the job benchmark times trained weights (--weights)")
         foveas = [parse_fovea(v) for v in args.fovea]  # every value checked before anything is timed

@@ -123,6 +123,17 @@ def writable_dir(path: str) -> Path:
     return p
 
 
+def output_file(value: str, suffixes: tuple[str, ...], flag: str = "--out") -> Path:
+    """The file an ``--out FILE`` flag names, refused unless it ends in one of ``suffixes``
+    (the first one named in the message), is not a folder, and its folder exists."""
+    out = Path(value)
+    if out.suffix not in suffixes or out.is_dir():
+        raise CliError(f"{flag} {value!r}: expected a {suffixes[0]} file")
+    if not out.parent.is_dir():
+        raise CliError(f"{flag} {value!r}: folder {str(out.parent)!r} does not exist")
+    return out
+
+
 BACKENDS = ("torch", "onnxruntime")
 #: bittc_core.estimator.TTA_MODES, kept here so --help imports no torch (the tests compare them)
 TTA_MODES = ("none", "flip")

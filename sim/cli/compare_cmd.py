@@ -5,9 +5,9 @@ from __future__ import annotations
 import argparse
 import json
 import math
-from pathlib import Path
 
 from bittc_core.errors import CliError
+from sim.cli.common import output_file
 
 
 def add_parser(sub) -> argparse.ArgumentParser:
@@ -44,12 +44,7 @@ def run(args) -> int:
 
     if not (args.tol_kph >= 0 and math.isfinite(args.tol_kph)):
         raise CliError(f"--tol-kph {args.tol_kph!r}: expected a number >= 0")
-    out = None if args.out is None else Path(args.out)
-    if out is not None:
-        if out.suffix != ".json" or out.is_dir():
-            raise CliError(f"--out {args.out!r}: expected a .json file")
-        if not out.parent.is_dir():
-            raise CliError(f"--out {args.out!r}: folder {str(out.parent)!r} does not exist")
+    out = None if args.out is None else output_file(args.out, (".json",))
     c = compare(load_runs(args.base), load_runs(args.new), args.tol_kph)
     print(format_comparison(c, markdown=args.markdown))
     if out is not None:

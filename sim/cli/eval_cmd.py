@@ -32,6 +32,7 @@ from sim.cli.common import (
     check_device,
     check_seed,
     flag_error,
+    output_file,
     parse_fovea,
 )
 
@@ -162,11 +163,7 @@ def _check(args) -> Path:
     out = Path(args.out or default)
     if args.out is None and out.exists():
         raise CliError(f"{default!r} exists (an earlier result); pass --out {default} to replace it, or another --out")
-    if out.suffix != ".json":
-        raise CliError(f"--out {str(out)!r}: expected a .json file")
-    if not out.parent.exists():
-        raise CliError(f"--out {str(out)!r}: folder {str(out.parent)!r} does not exist")
-    return out
+    return output_file(str(out), (".json",))
 
 
 def run_scenarios(args, out: Path) -> int:

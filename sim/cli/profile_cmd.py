@@ -37,16 +37,10 @@ def add_parser(sub) -> argparse.ArgumentParser:
 
 def _check(args):
     """-> (out path, (H, W), the fovea's zoom); every flag checked before anything is timed."""
-    from pathlib import Path
-
     from bittc_core.errors import CliError
-    from sim.cli.common import check_frame_size, parse_fovea, parse_size
+    from sim.cli.common import check_frame_size, output_file, parse_fovea, parse_size
 
-    out = Path(args.out)
-    if out.suffix not in (".yaml", ".yml"):
-        raise CliError(f"--out {args.out!r}: expected a .yaml file")
-    if not out.parent.is_dir():
-        raise CliError(f"--out {args.out!r}: folder {str(out.parent)!r} does not exist")
+    out = output_file(args.out, (".yaml", ".yml"))
     if args.calls <= 0 or args.threads <= 0:
         raise CliError(f"--calls {args.calls} / --threads {args.threads}: must be > 0")
     h, w = parse_size(args.size)
